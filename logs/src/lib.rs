@@ -1,0 +1,1 @@
+//! TCA traffic log: MCAP writer, reader, display and statistics.

@@ -1,0 +1,1 @@
+//! TCA wire protocol: envelopes, message classes, data formats and the codec.

@@ -1,0 +1,1 @@
+//! TCA module library: connect to central, register handlers, send messages.

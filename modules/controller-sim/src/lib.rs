@@ -1,0 +1,1 @@
+//! Simulated Controller: leg, carriage and terrain behind the Controller's message interface.

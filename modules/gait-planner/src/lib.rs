@@ -1,0 +1,1 @@
+//! Gait Planner: weighted constraint cost maps for footfalls and body moves.

@@ -1,0 +1,1 @@
+//! Imaging Sensor Manager: virtual Erim and Perceptron laser rangefinders.

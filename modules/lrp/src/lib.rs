@@ -1,0 +1,1 @@
+//! Leg Recovery Planner: the Envelope Trajectory Finding Algorithm.

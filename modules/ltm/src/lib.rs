@@ -1,0 +1,1 @@
+//! Local Terrain Map Manager: elevation, uncertainty, footfall and slope maps.

@@ -1,0 +1,1 @@
+//! Perception Display Manager: map pictures as PNG.

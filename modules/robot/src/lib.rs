@@ -1,0 +1,1 @@
+//! Single-leg walker models: leg kinematics, terrain height fields, grids, obstacle courses.

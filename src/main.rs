@@ -1,0 +1,2 @@
+//! The `tca` command.
+fn main() {}

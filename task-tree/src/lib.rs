@@ -1,0 +1,1 @@
+//! TCA task trees and temporal constraints: pure bookkeeping, no I/O.
