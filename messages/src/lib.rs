@@ -1,1 +1,51 @@
-//! TCA wire protocol: envelopes, message classes, data formats and the codec.
+//! The TCA wire protocol: envelopes, message classes, data formats and the codec.
+//!
+//! Every message in the system, between modules and central and in the traffic log, is an
+//! [`Envelope`]: a header (id, [`Class`], name, sender, task-node context, timestamp) and the
+//! postcard-encoded message data. A message type declares its name and class with
+//! [`message!`]; its [`DataFormat`] is derived from the type and registered with central, which
+//! refuses a registration whose format differs from the one already known for the name.
+//!
+//! # Layout
+//!
+//! - [`id`]: validated [`MessageName`], [`ModuleName`] and [`MessageId`].
+//! - [`class`]: the message classes of §3.2 (query, goal, command, inform, exception) and the
+//!   classes that answer them (reply, success, failure, error) or control central.
+//! - [`envelope`]: the [`Envelope`], task-node ids and temporal-constraint references.
+//! - [`message`]: the [`Message`] trait and the [`message!`] macro.
+//! - [`format`]: [`DataFormat`], a type's serde shape, compared field by field.
+//! - `trace`: derives a [`DataFormat`] by driving the type's `Deserialize` impl.
+//! - [`value`]: decoding data through a format without its Rust type (for the log viewer).
+//! - [`control`]: payloads of central's own `tca.*` control traffic.
+//! - [`route_error`]: [`RouteError`], what central answers when it cannot route a message.
+//! - [`codec`]: the single encode/decode entry point (postcard), strict and size-limited.
+//! - [`error`]: error types.
+
+pub mod class;
+pub mod codec;
+pub mod control;
+pub mod envelope;
+pub mod error;
+pub mod format;
+pub mod id;
+pub mod message;
+pub mod route_error;
+mod trace;
+pub mod value;
+
+pub use class::Class;
+pub use codec::{
+    DEFAULT_MAX_FRAME_BYTES, PROTOCOL_VERSION, decode, decode_data, encode, encode_data,
+};
+pub use envelope::{
+    ConstraintSpec, Envelope, Failure, NodeId, PointRef, SendOptions, TaskRef, TimePoint, now_ns,
+};
+pub use error::{CodecError, FormatError, NameError};
+pub use format::DataFormat;
+pub use id::{MAX_NAME_LEN, MessageId, MessageName, ModuleName};
+pub use message::Message;
+pub use route_error::RouteError;
+pub use value::Value;
+
+#[cfg(test)]
+mod codec_tests;

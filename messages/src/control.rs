@@ -1,0 +1,175 @@
+//! Central's own control traffic. These travel as ordinary envelopes of class
+//! [`Class::Control`](crate::Class::Control) with reserved `tca.` names, so the log records them
+//! like everything else.
+
+use serde::{Deserialize, Serialize};
+
+use crate::class::Class;
+use crate::envelope::{ConstraintSpec, NodeId};
+use crate::format::DataFormat;
+use crate::id::{MessageName, ModuleName};
+
+/// Prefix of every control message name.
+pub const CONTROL_PREFIX: &str = "tca.";
+
+/// Control message names.
+pub mod names {
+    /// Module -> central: first frame on a link.
+    pub const HELLO: &str = "tca.hello";
+    /// Central -> module: the link is accepted ([`super::Welcome`]).
+    pub const WELCOME: &str = "tca.welcome";
+    /// Module -> central: register handlers ([`super::Register`]); answered with
+    /// [`super::RegisterOutcome`].
+    pub const REGISTER: &str = "tca.register";
+    /// Module -> central: ask for the registry; answered with [`super::Registry`].
+    pub const REGISTRY: &str = "tca.registry";
+    /// Central -> module: stop the handler of a node that was killed ([`super::Cancel`]).
+    pub const CANCEL: &str = "tca.cancel";
+    /// Module -> central: the module is leaving.
+    pub const BYE: &str = "tca.bye";
+    /// Module -> central: kill a task tree or subtree ([`super::Kill`]).
+    pub const KILL: &str = "tca.kill";
+    /// Module -> central: add a temporal constraint ([`super::Constrain`]).
+    pub const CONSTRAIN: &str = "tca.constrain";
+    /// Module -> central: ask for the live task trees; answered with [`super::TreeView`].
+    pub const TREE: &str = "tca.tree";
+    /// Central -> sender: a goal or command it asked to hear about ended ([`super::TaskEnded`]).
+    pub const TASK_ENDED: &str = "tca.taskEnded";
+}
+
+/// Name of the pseudo-module central uses as sender of its own messages.
+pub const CENTRAL: &str = "central";
+
+/// First frame a module sends on a new link.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Hello {
+    /// The module's name; at most one connected module has it.
+    pub module: ModuleName,
+    /// How many goals/commands the module handles at once (TCA's resource management); 0 is
+    /// read as 1.
+    pub capacity: u32,
+    /// The module's process id, for diagnostics.
+    pub pid: u32,
+    /// The module's host name, for diagnostics.
+    pub host: String,
+}
+
+/// Central's acceptance of a link.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Welcome {
+    /// The link number: the high 32 bits of every message id the module sends.
+    pub link: u32,
+    /// Central's version string.
+    pub central_version: String,
+}
+
+/// One message a module offers to handle.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Registration {
+    /// Message name.
+    pub name: MessageName,
+    /// Its class (query, goal, command, inform or exception).
+    pub class: Class,
+    /// Format of the message data.
+    pub format: DataFormat,
+    /// Format of the reply, for queries.
+    pub reply: Option<DataFormat>,
+    /// Take the name over from another module that registered it (swapping implementations,
+    /// e.g. the simulator for the real controller).
+    pub replace: bool,
+}
+
+/// A batch of registrations.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Register {
+    /// The messages.
+    pub entries: Vec<Registration>,
+}
+
+/// Central's answer to [`Register`].
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RegisterOutcome {
+    /// Names now routed to the module.
+    pub accepted: Vec<MessageName>,
+    /// Names refused, each with the reason.
+    pub refused: Vec<(MessageName, String)>,
+}
+
+/// One entry of the registry.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RegistryEntry {
+    /// Message name.
+    pub name: MessageName,
+    /// Class.
+    pub class: Class,
+    /// The module that handles it.
+    pub handler: ModuleName,
+    /// Whether that module is connected now.
+    pub connected: bool,
+    /// Data format.
+    pub format: DataFormat,
+    /// Reply format, for queries.
+    pub reply: Option<DataFormat>,
+    /// Messages waiting in central for the handler.
+    pub waiting: u32,
+}
+
+/// The registry: every registered message.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Registry {
+    /// Entries sorted by name.
+    pub entries: Vec<RegistryEntry>,
+    /// Connected modules.
+    pub modules: Vec<ModuleName>,
+}
+
+/// Tells a module to stop handling a node that has been killed.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Cancel {
+    /// The node.
+    pub node: NodeId,
+}
+
+/// Kill a node and its subtree (a root kills the whole tree).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Kill {
+    /// The node.
+    pub node: NodeId,
+}
+
+/// Add a temporal constraint between existing nodes.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Constrain {
+    /// The constraint (`TaskRef::This` is not meaningful here).
+    pub constraint: ConstraintSpec,
+}
+
+/// The live task trees, rendered by central.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TreeView {
+    /// Indented text, one line per node.
+    pub text: String,
+    /// Live node count.
+    pub nodes: u64,
+}
+
+/// How a goal or command ended, sent to senders that asked (`SendOptions::notify`) and to the
+/// originator of every root task.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum TaskOutcome {
+    /// Achieved.
+    Achieved,
+    /// Failed, with the reason.
+    Failed(String),
+    /// Killed.
+    Killed,
+}
+
+/// Notification that a task ended.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TaskEnded {
+    /// The node.
+    pub node: NodeId,
+    /// Its outcome.
+    pub outcome: TaskOutcome,
+}
