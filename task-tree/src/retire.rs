@@ -1,0 +1,87 @@
+//! Freeing finished subtrees, and an estimate of the memory the tree holds.
+
+use std::mem::size_of;
+
+use crate::event::TreeEvent;
+use crate::id::NodeId;
+use crate::node::{Edge, Node};
+use crate::point::Endpoint;
+use crate::tree::TaskTree;
+
+/// Below this many children a parent's child list is not worth compacting.
+const COMPACT_MIN: usize = 8;
+
+impl TaskTree {
+    /// Removes a finished node and whatever is left below it, and reports `Retired`.
+    /// Constraints naming retired nodes count as satisfied from now on.
+    pub(crate) fn retire(&mut self, id: NodeId) {
+        let parent = self.nodes.get(&id).and_then(|n| n.parent);
+        for r in self.subtree_ids(id) {
+            let Some(node) = self.nodes.remove(&r) else {
+                continue;
+            };
+            if node.suspend_count > 0 {
+                self.suspended_nodes = self.suspended_nodes.saturating_sub(1);
+            }
+            // A finished node has no pending constraints left; stay safe if one slipped by.
+            for e in node.gates {
+                self.drop_wait(e.other, Endpoint::new(r, e.own), true);
+            }
+            for e in node.waits_on {
+                self.drop_gate(e.other, Endpoint::new(r, e.own));
+            }
+        }
+        match parent {
+            Some(p) => self.note_retired_child(p),
+            None => {
+                self.roots.remove(&id);
+            }
+        }
+        self.events.push(TreeEvent::Retired(id));
+    }
+
+    /// Counts a retired child and compacts the child list once retired ids dominate it,
+    /// so a long-lived parent's list stays proportional to its live children.
+    fn note_retired_child(&mut self, parent: NodeId) {
+        let Some(pn) = self.nodes.get_mut(&parent) else {
+            return;
+        };
+        pn.retired_children += 1;
+        if pn.children.len() < COMPACT_MIN || pn.retired_children * 2 <= pn.children.len() {
+            return;
+        }
+        let mut children = std::mem::take(&mut pn.children);
+        children.retain(|c| self.nodes.contains_key(c));
+        if children.capacity() > 4 * children.len().max(COMPACT_MIN) {
+            children.shrink_to(2 * children.len().max(COMPACT_MIN));
+        }
+        if let Some(pn) = self.nodes.get_mut(&parent) {
+            pn.children = children;
+            pn.retired_children = 0;
+        }
+    }
+
+    /// An estimate, in bytes, of the heap memory the tree holds: the node table at its
+    /// current capacity, each node's strings and lists, the root set and the scratch space
+    /// of the cycle search. Allocator overhead is not counted.
+    pub fn estimated_bytes(&self) -> usize {
+        let entry = size_of::<(NodeId, Node)>() + 1;
+        let table = self.nodes.capacity() * entry;
+        let per_node: usize = self
+            .nodes
+            .values()
+            .map(|n| {
+                n.name.capacity()
+                    + n.handler.capacity()
+                    + n.children.capacity() * size_of::<NodeId>()
+                    + (n.waits_on.capacity() + n.gates.capacity()) * size_of::<Edge>()
+                    + n.failure_reason.as_ref().map_or(0, String::capacity)
+            })
+            .sum();
+        // A B-tree set costs roughly its element plus a share of node overhead.
+        let roots = self.roots.len() * (size_of::<NodeId>() + 16);
+        let queues = self.events.capacity() * size_of::<TreeEvent>()
+            + self.work.capacity() * size_of::<crate::propagate::Work>();
+        table + per_node + roots + queues + self.search.estimated_bytes()
+    }
+}
