@@ -1,0 +1,280 @@
+//! Terrain as a height field: heights sampled on a regular grid, bilinear in between.
+//!
+//! Heights are the [`Grid`] cells' values at the cell centres (world Z, metres). Between four
+//! neighbouring samples the surface is the bilinear patch through them; outside the sampled
+//! rectangle the surface continues the edge samples (clamped), except for ray casting, which
+//! sees only the sampled rectangle.
+
+mod raycast;
+
+pub mod asc;
+
+use nalgebra::{Point2, Vector3};
+
+use crate::grid::{CellIndex, Grid, GridError};
+
+pub use raycast::RayHit;
+
+/// Why a height field could not be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TerrainError {
+    /// The grid layout is not valid.
+    #[error(transparent)]
+    Grid(#[from] GridError),
+    /// Fewer than 2 x 2 samples: no surface between samples.
+    #[error("a height field needs at least 2 x 2 samples, got {nx} x {ny}")]
+    TooSmall {
+        /// Columns.
+        nx: usize,
+        /// Rows.
+        ny: usize,
+    },
+    /// A height is NaN or infinite.
+    #[error("height at cell ({ix}, {iy}) is {value}, not a finite number")]
+    NotFinite {
+        /// Column.
+        ix: usize,
+        /// Row.
+        iy: usize,
+        /// The value.
+        value: f64,
+    },
+}
+
+/// A terrain surface: a grid of heights (world Z, metres) with bilinear interpolation, disc
+/// queries for foot collision, and fast ray casting for the laser scanners.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeightField {
+    grid: Grid<f64>,
+    min_m: f64,
+    max_m: f64,
+    mip: raycast::MaxMip,
+}
+
+impl HeightField {
+    /// A height field from a grid of heights.
+    pub fn from_grid(grid: Grid<f64>) -> Result<Self, TerrainError> {
+        if grid.nx() < 2 || grid.ny() < 2 {
+            return Err(TerrainError::TooSmall { nx: grid.nx(), ny: grid.ny() });
+        }
+        let mut min_m = f64::INFINITY;
+        let mut max_m = f64::NEG_INFINITY;
+        for (c, &h) in grid.iter() {
+            if !h.is_finite() {
+                return Err(TerrainError::NotFinite { ix: c.ix, iy: c.iy, value: h });
+            }
+            min_m = min_m.min(h);
+            max_m = max_m.max(h);
+        }
+        let mip = raycast::MaxMip::build(&grid);
+        Ok(Self { grid, min_m, max_m, mip })
+    }
+
+    /// A height field from row-major heights (`heights[iy * nx + ix]`), sample (0, 0) at
+    /// `origin`.
+    pub fn new(
+        origin: Point2<f64>,
+        resolution_m: f64,
+        nx: usize,
+        ny: usize,
+        heights: Vec<f64>,
+    ) -> Result<Self, TerrainError> {
+        Self::from_grid(Grid::from_vec(origin, resolution_m, nx, ny, heights)?)
+    }
+
+    /// A level surface at `height_m` with samples covering `[min, max]` (rounded outward
+    /// to whole cells).
+    pub fn flat(
+        min: Point2<f64>,
+        max: Point2<f64>,
+        resolution_m: f64,
+        height_m: f64,
+    ) -> Result<Self, TerrainError> {
+        let (nx, ny) = samples_covering(min, max, resolution_m)?;
+        Self::from_grid(Grid::filled(min, resolution_m, nx, ny, height_m)?)
+    }
+
+    /// The height samples.
+    pub fn grid(&self) -> &Grid<f64> {
+        &self.grid
+    }
+
+    /// Lowest sample, metres.
+    pub fn min_height_m(&self) -> f64 {
+        self.min_m
+    }
+
+    /// Highest sample, metres.
+    pub fn max_height_m(&self) -> f64 {
+        self.max_m
+    }
+
+    /// The sampled rectangle: (min corner, max corner) through the outermost samples.
+    pub fn extent(&self) -> (Point2<f64>, Point2<f64>) {
+        let o = self.grid.origin();
+        let r = self.grid.resolution_m();
+        (
+            o,
+            Point2::new(o.x + (self.grid.nx() - 1) as f64 * r, o.y + (self.grid.ny() - 1) as f64 * r),
+        )
+    }
+
+    /// Patch containing grid coordinates (clamped) and the local coordinates in it.
+    fn patch_at(&self, x: f64, y: f64) -> (usize, usize, f64, f64) {
+        let (gx, gy) = self.grid.world_to_grid(Point2::new(x, y));
+        let clamp = |g: f64, n: usize| -> (usize, f64) {
+            let g = if g.is_nan() { 0.0 } else { g.clamp(0.0, (n - 1) as f64) };
+            let i = (g.floor() as usize).min(n - 2);
+            (i, g - i as f64)
+        };
+        let (ix, u) = clamp(gx, self.grid.nx());
+        let (iy, v) = clamp(gy, self.grid.ny());
+        (ix, iy, u, v)
+    }
+
+    fn corners(&self, ix: usize, iy: usize) -> [f64; 4] {
+        let nx = self.grid.nx();
+        let h = self.grid.cells();
+        let i = iy * nx + ix;
+        // ix <= nx - 2 and iy <= ny - 2 by construction of patch_at and the ray caster.
+        [h[i], h[i + 1], h[i + nx], h[i + nx + 1]]
+    }
+
+    /// Height of the surface at world (x, y), metres (bilinear; edge-clamped outside).
+    pub fn height_at(&self, x: f64, y: f64) -> f64 {
+        let (ix, iy, u, v) = self.patch_at(x, y);
+        let [h00, h10, h01, h11] = self.corners(ix, iy);
+        let a = h00 + (h10 - h00) * u;
+        let b = h01 + (h11 - h01) * u;
+        a + (b - a) * v
+    }
+
+    /// Upward unit normal of the surface at world (x, y).
+    pub fn normal_at(&self, x: f64, y: f64) -> Vector3<f64> {
+        let (ix, iy, u, v) = self.patch_at(x, y);
+        self.patch_normal(ix, iy, u, v)
+    }
+
+    fn patch_normal(&self, ix: usize, iy: usize, u: f64, v: f64) -> Vector3<f64> {
+        let [h00, h10, h01, h11] = self.corners(ix, iy);
+        let r = self.grid.resolution_m();
+        let dhdx = ((h10 - h00) * (1.0 - v) + (h11 - h01) * v) / r;
+        let dhdy = ((h01 - h00) * (1.0 - u) + (h11 - h10) * u) / r;
+        Vector3::new(-dhdx, -dhdy, 1.0).normalize()
+    }
+
+    /// Highest point of the surface over a disc (the foot's footprint), metres.
+    ///
+    /// Inside a bilinear patch the surface has no strict interior maximum, so the maximum
+    /// over the disc is at a sample inside it or on its rim; the rim is sampled at half the
+    /// grid resolution, which bounds the error by the surface's rise over a quarter cell.
+    pub fn max_height_in_disc(&self, center: Point2<f64>, radius_m: f64) -> f64 {
+        let mut best = self.height_at(center.x, center.y);
+        if radius_m.is_nan() || radius_m <= 0.0 || !radius_m.is_finite() {
+            return best;
+        }
+        let r = self.grid.resolution_m();
+        let r2 = radius_m * radius_m;
+        let lo = Point2::new(center.x - radius_m, center.y - radius_m);
+        let hi = Point2::new(center.x + radius_m, center.y + radius_m);
+        if let Some((xs, ys)) = self.grid.cell_range(lo, hi) {
+            let nx = self.grid.nx();
+            let h = self.grid.cells();
+            for iy in ys {
+                let cy = self.grid.origin().y + iy as f64 * r - center.y;
+                let row = iy * nx;
+                for ix in xs.clone() {
+                    let cx = self.grid.origin().x + ix as f64 * r - center.x;
+                    if cx * cx + cy * cy <= r2
+                        && let Some(&v) = h.get(row + ix)
+                    {
+                        best = best.max(v);
+                    }
+                }
+            }
+        }
+        let n = ((std::f64::consts::TAU * radius_m / (0.5 * r)).ceil() as usize).clamp(16, 4096);
+        for k in 0..n {
+            let a = std::f64::consts::TAU * k as f64 / n as f64;
+            let (s, c) = a.sin_cos();
+            best = best.max(self.height_at(center.x + radius_m * c, center.y + radius_m * s));
+        }
+        best
+    }
+
+    /// Height of sample `c`, if in the grid.
+    pub fn sample(&self, c: CellIndex) -> Option<f64> {
+        self.grid.get(c).copied()
+    }
+}
+
+/// Number of samples (nx, ny) at `resolution_m` covering `[min, max]` with sample 0 at `min`.
+pub(crate) fn samples_covering(
+    min: Point2<f64>,
+    max: Point2<f64>,
+    resolution_m: f64,
+) -> Result<(usize, usize), TerrainError> {
+    if !(resolution_m.is_finite() && resolution_m > 0.0) {
+        return Err(GridError::BadResolution(resolution_m).into());
+    }
+    let count = |lo: f64, hi: f64| -> Result<usize, TerrainError> {
+        let n = ((hi - lo) / resolution_m - 1e-9).ceil() + 1.0;
+        if (2.0..1e8).contains(&n) {
+            Ok(n as usize)
+        } else {
+            Err(TerrainError::TooSmall { nx: 0, ny: 0 })
+        }
+    };
+    Ok((count(min.x, max.x)?, count(min.y, max.y)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ramp() -> HeightField {
+        // h = 0.1 x + 0.2 y on a 1 m grid, 5 x 4 samples.
+        HeightField::from_grid(Grid::from_fn(Point2::new(0.0, 0.0), 1.0, 5, 4, |_, p| 0.1 * p.x + 0.2 * p.y).unwrap())
+            .unwrap()
+    }
+
+    #[test]
+    fn bilinear_reproduces_a_plane_and_clamps_outside() {
+        let t = ramp();
+        assert!((t.height_at(2.3, 1.7) - (0.23 + 0.34)).abs() < 1e-12);
+        assert!((t.height_at(-5.0, 1.0) - 0.2).abs() < 1e-12);
+        assert!((t.height_at(10.0, 10.0) - (0.4 + 0.6)).abs() < 1e-12);
+        let n = t.normal_at(1.5, 1.5);
+        let expect = Vector3::new(-0.1, -0.2, 1.0).normalize();
+        assert!((n - expect).norm() < 1e-12);
+        assert_eq!((t.min_height_m(), t.max_height_m()), (0.0, 1.0));
+    }
+
+    #[test]
+    fn disc_maximum_sees_a_single_high_sample_and_the_rim() {
+        let mut g = Grid::filled(Point2::origin(), 0.02, 50, 50, 0.0).unwrap();
+        *g.get_mut(CellIndex::new(25, 25)).unwrap() = 0.3;
+        let t = HeightField::from_grid(g).unwrap();
+        // Sample at (0.5, 0.5): inside a disc of 0.15 m radius centred 0.14 m away.
+        assert!((t.max_height_in_disc(Point2::new(0.36, 0.5), 0.15) - 0.3).abs() < 1e-12);
+        // Centred 0.16 m away: only the rim reaches the bump's slope (which ends at 0.52).
+        assert_eq!(t.max_height_in_disc(Point2::new(0.5, 0.69), 0.15), 0.0);
+        let rim = t.max_height_in_disc(Point2::new(0.5, 0.655), 0.15);
+        assert!(rim > 0.0 && rim < 0.3, "{rim}");
+    }
+
+    #[test]
+    fn refuses_bad_heights() {
+        let err = HeightField::new(Point2::origin(), 1.0, 2, 2, vec![0.0, f64::NAN, 0.0, 0.0]).unwrap_err();
+        assert!(matches!(err, TerrainError::NotFinite { ix: 1, iy: 0, .. }));
+        assert!(matches!(HeightField::new(Point2::origin(), 1.0, 1, 2, vec![0.0, 0.0]), Err(TerrainError::TooSmall { .. })));
+    }
+
+    #[test]
+    fn flat_covers_the_rectangle() {
+        let t = HeightField::flat(Point2::origin(), Point2::new(6.0, 11.0), 0.02, 0.0).unwrap();
+        assert_eq!((t.grid().nx(), t.grid().ny()), (301, 551));
+        let (lo, hi) = t.extent();
+        assert!((hi.x - 6.0).abs() < 1e-9 && (hi.y - 11.0).abs() < 1e-9 && lo == Point2::origin());
+    }
+}
