@@ -357,3 +357,215 @@ impl TaskTree {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::testing::Bench;
+    use crate::{Constraint, NewConstraint, NodeId, NodeSpec, TreeError, TreeEvent};
+
+    #[test]
+    fn a_cycle_through_the_implicit_orderings_is_refused_and_named() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        let n2 = b.goal(Some(root), "planGait");
+        let n3 = b.goal(Some(n2), "legMove");
+        let err = b
+            .tree
+            .add_constraint(Constraint::new(n3.achievement_end(), n2.handling_start()), 9)
+            .expect_err("cycle");
+        assert_eq!(
+            err.to_string(),
+            "constraint end(achieve n3) <= start(handle n2) would close the cycle \
+             end(achieve n3) -> start(handle n2) -> start(handle n3) -> end(handle n3) -> \
+             end(achieve n3); drop or reverse a constraint on that cycle"
+        );
+    }
+
+    #[test]
+    fn a_cycle_through_explicit_constraints_is_refused() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        let a = b.command(root, "a", &[]);
+        let c = b.command(root, "c", &[NewConstraint::sequential_achievement_after(a)]);
+        let err = b
+            .tree
+            .add_constraint(Constraint::sequential_achievement(c, a), 9)
+            .expect_err("cycle");
+        assert!(matches!(err, TreeError::Cycle { .. }), "{err}");
+        // The reverse direction repeats what is there and is accepted.
+        assert!(
+            b.tree
+                .add_constraint(Constraint::invocation_order(a, c), 9)
+                .is_ok()
+        );
+    }
+
+    #[test]
+    fn a_refused_node_leaves_the_tree_unchanged_and_its_id_unused() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        let child = b.goal(Some(root), "step");
+        let before = b.tree.render_text();
+        let spec = NodeSpec::goal("bad", "planner")
+            .under(child)
+            .with(NewConstraint::invocation_after(root))
+            .with(NewConstraint::Before {
+                point: crate::Point::AchievementEnd,
+                after: child.handling_start(),
+            });
+        let err = b.tree.add_node(spec, 9).expect_err("cycle");
+        assert!(matches!(err, TreeError::Cycle { .. }), "{err}");
+        assert_eq!(b.tree.render_text(), before);
+        assert_eq!(b.tree.next_id(), NodeId(3));
+        assert_eq!(b.tree.get(root).map(|v| v.gating().count()), Some(0));
+    }
+
+    #[test]
+    fn a_constraint_whose_before_point_has_occurred_is_satisfied_at_once() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let cmd = b.command(root, "move", &[NewConstraint::invocation_after(root)]);
+        assert!(b.tree.is_ready(cmd));
+        assert_eq!(b.tree.get(cmd).map(|v| v.waiting_on().count()), Some(0));
+    }
+
+    #[test]
+    fn constraints_on_retired_nodes_are_satisfied_as_before_and_refused_as_after() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let done = b.command(root, "done", &[]);
+        b.run(done);
+        assert!(b.tree.was_retired(done));
+        let next = b.command(root, "next", &[NewConstraint::sequential_achievement_after(done)]);
+        assert!(b.tree.is_ready(next));
+        let err = b
+            .tree
+            .add_constraint(Constraint::sequential_achievement(next, done), 20)
+            .expect_err("unsatisfiable");
+        assert!(matches!(err, TreeError::Unsatisfiable { .. }), "{err}");
+    }
+
+    #[test]
+    fn a_constraint_on_a_point_that_has_passed_is_refused() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        let other = b.goal(None, "other");
+        b.start(root);
+        let err = b
+            .tree
+            .add_constraint(Constraint::invocation_order(other, root), 9)
+            .expect_err("unsatisfiable");
+        assert_eq!(
+            err.to_string(),
+            "constraint start(handle n2) <= start(handle n1) can never hold: \
+             start(handle n1) already occurred (at 3 ns), while start(handle n2) has not"
+        );
+    }
+
+    #[test]
+    fn unknown_nodes_and_queries_are_refused() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        let err = b
+            .tree
+            .add_constraint(Constraint::invocation_order(root, NodeId(99)), 5)
+            .expect_err("unknown");
+        assert_eq!(
+            err,
+            TreeError::UnknownNode {
+                node: NodeId(99),
+                last: 1
+            }
+        );
+        b.start(root);
+        let q = b.add(NodeSpec::query("bodyPosition", "controller").under(root));
+        let err = b
+            .tree
+            .add_constraint(Constraint::invocation_order(root, q), 9)
+            .expect_err("query");
+        assert!(matches!(err, TreeError::QueryConstrained { .. }), "{err}");
+        let err = b
+            .tree
+            .add_node(
+                NodeSpec::goal("x", "planner")
+                    .under(q)
+                    .with(NewConstraint::invocation_after(root)),
+                9,
+            )
+            .expect_err("under a query");
+        assert!(matches!(err, TreeError::BadSpec { .. }), "{err}");
+    }
+
+    #[test]
+    fn the_same_constraint_twice_is_stored_once() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        let a = b.goal(Some(root), "a");
+        let c = b.goal(Some(root), "c");
+        for t in 10..13 {
+            b.tree
+                .add_constraint(Constraint::delay_planning(a, c), t)
+                .expect("accepted");
+        }
+        assert_eq!(b.tree.get(c).map(|v| v.waiting_on().count()), Some(1));
+    }
+
+    #[test]
+    fn a_constraint_added_to_a_ready_node_withdraws_readiness_until_it_holds() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let a = b.command(root, "a", &[]);
+        let c = b.command(root, "c", &[]);
+        assert!(b.tree.is_ready(c));
+        b.tree
+            .add_constraint(Constraint::sequential_achievement(a, c), 10)
+            .expect("accepted");
+        assert!(!b.tree.is_ready(c));
+        assert_eq!(
+            b.tree.why_not_ready(c).as_deref(),
+            Some("constraint end(achieve n2) <= start(achieve n3) does not hold yet")
+        );
+        b.now = 10;
+        let events = b.run(a);
+        assert!(events.contains(&TreeEvent::Ready(c)), "{events:?}");
+    }
+
+    #[test]
+    fn plan_first_holds_every_command_until_all_planning_is_done() {
+        let mut b = Bench::new();
+        let root = b.add(NodeSpec::goal("walk", "planner").with(NewConstraint::PlanFirst));
+        b.start(root);
+        let g1 = b.goal(Some(root), "planA");
+        let g2 = b.goal(Some(root), "planB");
+        b.start(g1);
+        let c1 = b.command(g1, "moveA", &[]);
+        b.succeed(g1);
+        assert!(!b.tree.is_ready(c1), "planB and walk are still planning");
+        b.succeed(root);
+        assert!(!b.tree.is_ready(c1), "planB is still planning");
+        b.start(g2);
+        let c2 = b.command(g2, "moveB", &[]);
+        let events = b.succeed(g2);
+        assert!(events.contains(&TreeEvent::Ready(c1)), "{events:?}");
+        assert!(events.contains(&TreeEvent::Ready(c2)), "{events:?}");
+    }
+
+    #[test]
+    fn plan_first_added_later_covers_existing_goals() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let g1 = b.goal(Some(root), "plan");
+        let c = b.command(root, "move", &[]);
+        assert!(b.tree.is_ready(c));
+        b.tree.plan_first(root, 10).expect("plan first");
+        assert!(!b.tree.is_ready(c));
+        b.now = 10;
+        b.succeed(root);
+        let events = b.run(g1);
+        assert!(events.contains(&TreeEvent::Ready(c)), "{events:?}");
+    }
+}

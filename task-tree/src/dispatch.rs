@@ -93,3 +93,174 @@ impl TaskTree {
         Ok(self.take_events())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::testing::Bench;
+    use crate::{
+        Constraint, NewConstraint, NodeSpec, NodeState, Outcome, Point, TreeError, TreeEvent,
+    };
+
+    #[test]
+    fn starting_a_blocked_node_says_which_constraint_blocks_it() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let leg = b.command(root, "legMove", &[]);
+        let body = b.command(root, "bodyMove", &[NewConstraint::sequential_achievement_after(leg)]);
+        let err = b.tree.start(body, b.now).expect_err("not ready");
+        assert_eq!(
+            err.to_string(),
+            "cannot start n3: constraint end(achieve n2) <= start(achieve n3) does not hold \
+             yet; dispatch it after its Ready event"
+        );
+        let child = b.goal(None, "other");
+        let grandchild = b.goal(Some(child), "inner");
+        let err = b.tree.start(grandchild, b.now).expect_err("parent not started");
+        assert!(
+            matches!(&err, TreeError::NotReady { reason, .. } if reason.contains("parent n4")),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_command_start_starts_the_achievement_of_its_ancestors_outermost_first() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let step = b.goal(Some(root), "step");
+        b.start(step);
+        let cmd = b.command(step, "move", &[]);
+        let events = b.start(cmd);
+        assert_eq!(
+            events,
+            vec![
+                TreeEvent::HandlingStarted(cmd),
+                TreeEvent::AchievementStarted(root),
+                TreeEvent::AchievementStarted(step),
+                TreeEvent::AchievementStarted(cmd),
+            ]
+        );
+    }
+
+    #[test]
+    fn completion_climbs_the_tree_and_retires_it() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let cmd = b.command(root, "move", &[]);
+        assert_eq!(b.tree.get(root).map(|v| v.state()), Some(NodeState::Handling));
+        b.start(cmd);
+        b.succeed(root);
+        assert_eq!(b.tree.get(root).map(|v| v.state()), Some(NodeState::Achieving));
+        let events = b.succeed(cmd);
+        assert_eq!(
+            events,
+            vec![
+                TreeEvent::HandlingEnded(cmd),
+                TreeEvent::Achieved(cmd),
+                TreeEvent::Retired(cmd),
+                TreeEvent::Achieved(root),
+                TreeEvent::Retired(root),
+            ]
+        );
+        assert!(b.tree.is_empty());
+    }
+
+    #[test]
+    fn a_goal_without_commands_starts_its_achievement_when_its_handler_finishes() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "think");
+        let events = b.run(root);
+        assert_eq!(
+            events,
+            vec![
+                TreeEvent::HandlingStarted(root),
+                TreeEvent::HandlingEnded(root),
+                TreeEvent::AchievementStarted(root),
+                TreeEvent::Achieved(root),
+                TreeEvent::Retired(root),
+            ]
+        );
+    }
+
+    #[test]
+    fn a_constraint_on_a_handling_end_delays_the_end_not_the_handler() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let a = b.command(root, "a", &[]);
+        let c = b.command(
+            root,
+            "c",
+            &[NewConstraint::After {
+                before: a.achievement_end(),
+                point: Point::HandlingEnd,
+            }],
+        );
+        b.start(c);
+        let events = b.succeed(c);
+        assert!(events.is_empty(), "{events:?}");
+        let view = b.tree.get(c).expect("live");
+        assert_eq!(view.state(), NodeState::Handling);
+        assert!(view.finish_pending());
+        let err = b.tree.finish(c, Outcome::Success, 20).expect_err("twice");
+        assert!(matches!(err, TreeError::WrongState { .. }), "{err}");
+        b.now = 20;
+        let events = b.run(a);
+        let ended = events.iter().position(|e| *e == TreeEvent::HandlingEnded(c));
+        let achieved = events.iter().position(|e| *e == TreeEvent::Achieved(a));
+        assert!(ended.is_some() && achieved < ended, "{events:?}");
+        assert!(events.contains(&TreeEvent::Achieved(c)), "{events:?}");
+    }
+
+    #[test]
+    fn a_constraint_on_an_achievement_end_keeps_the_node_achieving() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let a = b.command(root, "a", &[]);
+        let c = b.command(root, "c", &[]);
+        b.tree
+            .add_constraint(Constraint::new(a.achievement_end(), c.achievement_end()), 10)
+            .expect("accepted");
+        b.now = 10;
+        b.run(c);
+        assert_eq!(b.tree.get(c).map(|v| v.state()), Some(NodeState::Achieving));
+        let events = b.run(a);
+        assert!(events.contains(&TreeEvent::Achieved(c)), "{events:?}");
+    }
+
+    #[test]
+    fn queries_are_recorded_never_dispatched_and_their_failure_stays_put() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let (q, events) = b
+            .tree
+            .add_node(NodeSpec::query("bodyPosition", "controller").under(root), 5)
+            .expect("query");
+        assert!(events.is_empty());
+        assert!(!b.tree.is_ready(q));
+        b.now = 5;
+        b.start(q);
+        b.succeed(root);
+        // Its handler has finished: its achievement has started, and waits for the query.
+        assert_eq!(b.tree.get(root).map(|v| v.state()), Some(NodeState::Achieving));
+        let events = b.fail(q, "timed out");
+        assert!(events.contains(&TreeEvent::Achieved(root)), "{events:?}");
+    }
+
+    #[test]
+    fn finishing_a_node_that_is_not_running_is_refused() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        let err = b.tree.finish(root, Outcome::Success, 5).expect_err("waiting");
+        assert!(
+            matches!(err, TreeError::WrongState { op: "finish", state: NodeState::Waiting, .. }),
+            "{err}"
+        );
+        let err = b.tree.start(root, 0).expect_err("time");
+        assert!(matches!(err, TreeError::TimeWentBackwards { .. }), "{err}");
+    }
+}

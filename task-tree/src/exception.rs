@@ -269,3 +269,249 @@ impl TaskTree {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::testing::Bench;
+    use crate::{Constraint, NewConstraint, NodeSpec, NodeState, TreeError, TreeEvent};
+
+    #[test]
+    fn a_failure_propagates_to_the_root_killing_the_rest() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let step = b.goal(Some(root), "step");
+        let other = b.goal(Some(root), "other");
+        b.start(step);
+        let leg = b.command(step, "legMove", &[]);
+        let body = b.command(step, "bodyMove", &[NewConstraint::sequential_achievement_after(leg)]);
+        b.succeed(step);
+        b.start(leg);
+        let events = b.fail(leg, "foot slipped");
+        let reason = "descendant n4 (legMove) failed: foot slipped".to_string();
+        assert_eq!(
+            events,
+            vec![
+                TreeEvent::Failed {
+                    node: leg,
+                    reason: "foot slipped".into()
+                },
+                TreeEvent::Failed {
+                    node: step,
+                    reason: reason.clone()
+                },
+                TreeEvent::Killed {
+                    node: body,
+                    was: NodeState::Waiting
+                },
+                TreeEvent::Failed { node: root, reason },
+                TreeEvent::CancelHandler(root),
+                TreeEvent::Killed {
+                    node: other,
+                    was: NodeState::Waiting
+                },
+                TreeEvent::Retired(root),
+            ]
+        );
+        assert!(b.tree.is_empty());
+    }
+
+    #[test]
+    fn a_held_failure_can_be_retried_and_the_plan_completes() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let leg = b.command(root, "legMove", &[]);
+        let body = b.command(root, "bodyMove", &[NewConstraint::sequential_achievement_after(leg)]);
+        b.succeed(root);
+        b.start(leg);
+        b.tree.suspend(leg, b.now).expect("suspend");
+        let events = b.fail(leg, "slip");
+        assert_eq!(
+            events,
+            vec![TreeEvent::Failed {
+                node: leg,
+                reason: "slip".into()
+            }]
+        );
+        let view = b.tree.get(leg).expect("held");
+        assert!(view.failure_held());
+        assert!(!b.tree.is_ready(body), "bodyMove still waits for legMove");
+        let events = b.tree.retry(leg, b.now).expect("retry");
+        assert!(events.is_empty(), "still suspended: {events:?}");
+        let events = b.tree.resume(leg, b.now).expect("resume");
+        assert_eq!(events, vec![TreeEvent::Ready(leg)]);
+        let events = b.run(leg);
+        assert!(events.contains(&TreeEvent::Ready(body)), "{events:?}");
+        b.run(body);
+        assert!(b.tree.is_empty());
+    }
+
+    #[test]
+    fn resuming_with_the_failure_still_held_lets_it_propagate() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let leg = b.command(root, "legMove", &[]);
+        b.start(leg);
+        b.tree.suspend(root, b.now).expect("suspend");
+        b.fail(leg, "slip");
+        assert_eq!(b.tree.len(), 2);
+        let events = b.tree.resume(root, b.now).expect("resume");
+        assert!(
+            events.contains(&TreeEvent::Failed {
+                node: root,
+                reason: "descendant n2 (legMove) failed: slip".into()
+            }),
+            "{events:?}"
+        );
+        assert!(b.tree.is_empty());
+        let err = b.tree.resume(root, b.now).expect_err("retired");
+        assert!(matches!(err, TreeError::Retired { .. }), "{err}");
+    }
+
+    #[test]
+    fn an_exception_handled_two_levels_up_patches_the_plan_and_completes() {
+        let mut b = Bench::new();
+        let walk = b.goal(None, "walk");
+        b.start(walk);
+        let step = b.goal(Some(walk), "step");
+        b.start(step);
+        let leg_goal = b.goal(Some(step), "legMoveGoal");
+        let body = b.command(step, "bodyMove", &[NewConstraint::sequential_achievement_after(leg_goal)]);
+        b.succeed(step);
+        b.start(leg_goal);
+        let leg = b.command(leg_goal, "legMove", &[]);
+        b.succeed(leg_goal);
+        b.start(leg);
+        // The controller raises an exception: central suspends, reports the failure...
+        b.tree.suspend(leg, b.now).expect("suspend");
+        b.fail(leg, "leg struck terrain");
+        // ...finds the handler on `step` (two levels up), which ignores the failed move
+        // by killing it and patches in a recovery move before the body move.
+        let ancestors: Vec<_> = b.tree.ancestors(leg).collect();
+        assert_eq!(ancestors, vec![leg_goal, step, walk]);
+        b.tree.kill(leg, b.now).expect("kill");
+        let (recover, _) = b
+            .tree
+            .add_node(
+                NodeSpec::command("recoverLeg", "controller")
+                    .under(step)
+                    .with(NewConstraint::Before {
+                        point: crate::Point::AchievementEnd,
+                        after: body.achievement_start(),
+                    }),
+                b.now,
+            )
+            .expect("patch");
+        b.tree.resume(leg, b.now).expect_err("the killed node was retired");
+        assert!(b.tree.is_ready(recover));
+        assert!(!b.tree.is_ready(body));
+        b.run(recover);
+        assert!(b.tree.is_ready(body));
+        b.run(body);
+        b.succeed(walk);
+        assert!(b.tree.is_empty(), "{}", b.tree.render_text());
+    }
+
+    #[test]
+    fn killing_a_subtree_reports_running_handlers_and_frees_the_parent() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let step = b.goal(Some(root), "step");
+        b.start(step);
+        let leg = b.command(step, "legMove", &[]);
+        let waiting = b.command(step, "bodyMove", &[NewConstraint::sequential_achievement_after(leg)]);
+        let later = b.command(root, "later", &[NewConstraint::sequential_achievement_after(step)]);
+        b.succeed(root);
+        b.start(leg);
+        let events = b.tree.kill(step, b.now).expect("kill");
+        assert_eq!(
+            events,
+            vec![
+                TreeEvent::Killed {
+                    node: step,
+                    was: NodeState::Handling
+                },
+                TreeEvent::Killed {
+                    node: leg,
+                    was: NodeState::Handling
+                },
+                TreeEvent::Killed {
+                    node: waiting,
+                    was: NodeState::Waiting
+                },
+                TreeEvent::Retired(step),
+                TreeEvent::Ready(later),
+            ]
+        );
+        b.run(later);
+        assert!(b.tree.is_empty());
+    }
+
+    #[test]
+    fn suspension_stops_dispatch_in_the_subtree_until_resumed() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let a = b.command(root, "a", &[]);
+        let c = b.command(root, "c", &[NewConstraint::sequential_achievement_after(a)]);
+        b.tree.suspend(root, b.now).expect("suspend");
+        b.tree.suspend(root, b.now).expect("suspend twice");
+        assert!(!b.tree.is_ready(a));
+        let events = b.succeed(root);
+        assert!(events.iter().all(|e| !matches!(e, TreeEvent::Ready(_))), "{events:?}");
+        assert!(b.tree.resume(root, b.now).expect("resume").is_empty());
+        let events = b.tree.resume(root, b.now).expect("resume");
+        assert_eq!(events, vec![TreeEvent::Ready(a)]);
+        assert!(!b.tree.is_ready(c));
+        let err = b.tree.resume(root, b.now).expect_err("not suspended");
+        assert_eq!(err, TreeError::NotSuspended { node: root });
+    }
+
+    #[test]
+    fn retry_replans_a_handled_goal_after_killing_its_children() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.run(root);
+        assert!(b.tree.is_empty(), "a childless goal is achieved at once");
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let step = b.goal(Some(root), "step");
+        b.start(step);
+        let cmd = b.command(step, "move", &[]);
+        b.succeed(step);
+        let events = b.tree.retry(step, b.now).expect("retry");
+        assert_eq!(
+            events,
+            vec![
+                TreeEvent::Killed {
+                    node: cmd,
+                    was: NodeState::Waiting
+                },
+                TreeEvent::Retired(cmd),
+                TreeEvent::Ready(step),
+            ]
+        );
+        let view = b.tree.get(step).expect("live");
+        assert_eq!(view.state(), NodeState::Waiting);
+        assert_eq!(view.children().count(), 0);
+        let err = b.tree.retry(step, b.now).expect_err("waiting");
+        assert!(matches!(err, TreeError::WrongState { op: "retry", .. }), "{err}");
+    }
+
+    #[test]
+    fn a_dead_node_satisfies_the_constraints_that_waited_for_it() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        let a = b.command(root, "a", &[]);
+        let c = b.command(root, "c", &[]);
+        b.tree
+            .add_constraint(Constraint::delay_planning(a, c), b.now)
+            .expect("accepted");
+        let events = b.tree.kill(a, b.now).expect("kill");
+        assert!(events.contains(&TreeEvent::Ready(c)), "{events:?}");
+    }
+}

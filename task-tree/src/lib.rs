@@ -188,6 +188,8 @@ mod render;
 mod retire;
 mod spec;
 mod state;
+#[cfg(test)]
+mod testing;
 mod tree;
 mod view;
 

@@ -34,11 +34,10 @@ impl TaskTree {
         let Some(node) = self.nodes.get(&ep.node) else {
             return;
         };
-        if ep.point == Point::AchievementStart
-            && node.kind == NodeKind::Goal
-            && !node.occurred(Point::AchievementStart)
-        {
-            // A goal's achievement gate also gates every command below it.
+        if ep.point == Point::AchievementStart && node.kind == NodeKind::Goal {
+            // A goal's achievement gate also gates every command below it. Scan even if
+            // the achievement has started since the gate opened (in this same call):
+            // commands below it have not been looked at yet.
             let ids = self.subtree_ids(ep.node);
             self.work.extend(ids.into_iter().map(Work::Advance));
         } else {

@@ -76,3 +76,27 @@ impl TaskTree {
         out.push('\n');
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::testing::Bench;
+    use crate::NewConstraint;
+
+    #[test]
+    fn renders_one_indented_line_per_node_with_state_and_constraints() {
+        let mut b = Bench::new();
+        let walk = b.goal(None, "walk");
+        b.start(walk);
+        let step = b.goal(Some(walk), "planGait");
+        let leg = b.command(step, "legMove", &[]);
+        b.command(step, "bodyMove", &[NewConstraint::sequential_achievement_after(leg)]);
+        b.tree.suspend(step, b.now).expect("suspend");
+        assert_eq!(
+            b.tree.render_text(),
+            "n1 goal walk -> planner: handling\n\
+             \x20 n2 goal planGait -> planner: waiting, suspended\n\
+             \x20   n3 command legMove -> controller: waiting\n\
+             \x20   n4 command bodyMove -> controller: waiting; waits for end(achieve n3) <= start(achieve n4)\n"
+        );
+    }
+}

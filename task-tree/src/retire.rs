@@ -85,3 +85,24 @@ impl TaskTree {
         table + per_node + roots + queues + self.search.estimated_bytes()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::testing::Bench;
+
+    #[test]
+    fn a_long_lived_parent_keeps_its_child_list_short() {
+        let mut b = Bench::new();
+        let root = b.goal(None, "walk");
+        b.start(root);
+        for i in 0..1000 {
+            let c = b.command(root, &format!("step{i}"), &[]);
+            b.run(c);
+        }
+        let node = b.tree.nodes.get(&root).expect("live");
+        assert!(node.children.len() < 16, "{}", node.children.len());
+        assert!(node.children.capacity() < 64, "{}", node.children.capacity());
+        assert_eq!(b.tree.len(), 1);
+        assert!(b.tree.estimated_bytes() > 0);
+    }
+}

@@ -1,0 +1,296 @@
+//! A discrete-event driver for the single-leg walking task tree of Figure 5 (paper 003
+//! §3.2), shared by the tests and the benchmark.
+//!
+//! Per step `k`: the Gait Planner handles the goal `planGait k`, which issues the goal
+//! `legMove k` (handled by the Leg Recovery Planner, which issues the command `legMove
+//! k`) and the command `bodyMove k`, and issues `planGait k+1` under the walk goal. Each
+//! module handles one message at a time (TCA's resource management), and each handler
+//! takes a fixed time. Constraints:
+//!
+//! - always: the legMove goal of step k is achieved before bodyMove k starts, and the
+//!   legMove goal of step k+1 is not achieved before bodyMove k is (its planning may run
+//!   ahead, its command may not);
+//! - sequential: `planGait k+1` is not planned until `bodyMove k` is achieved;
+//! - concurrent: `planGait k+1` waits only for `bodyMove k-1`, so step k+1 is planned
+//!   while step k executes.
+#![allow(dead_code)]
+
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, VecDeque};
+
+use tca_task_tree::{
+    Nanos, NewConstraint, NodeId, NodeSpec, Outcome, TaskTree, TreeEvent, TreeOp,
+};
+
+/// How steps overlap.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Mode {
+    Sequential,
+    Concurrent,
+}
+
+/// What a node stands for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Role {
+    Walk,
+    PlanGait(u32),
+    LegMoveGoal(u32),
+    LegMove(u32),
+    BodyMove(u32),
+}
+
+impl Role {
+    /// The module that handles it: 0 user interface, 1 gait planner, 2 leg recovery
+    /// planner, 3 controller.
+    fn module(self) -> usize {
+        match self {
+            Role::Walk => 0,
+            Role::PlanGait(_) => 1,
+            Role::LegMoveGoal(_) => 2,
+            Role::LegMove(_) | Role::BodyMove(_) => 3,
+        }
+    }
+
+    fn handler(self) -> &'static str {
+        ["user-interface", "gait-planner", "lrp", "controller"][self.module()]
+    }
+}
+
+/// How long each handler runs.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Durations {
+    pub(crate) walk: Nanos,
+    pub(crate) plan_gait: Nanos,
+    pub(crate) lrp: Nanos,
+    pub(crate) leg_move: Nanos,
+    pub(crate) body_move: Nanos,
+}
+
+impl Durations {
+    /// Small integers, easy to follow by hand.
+    pub(crate) const HAND: Durations = Durations {
+        walk: 1,
+        plan_gait: 2,
+        lrp: 1,
+        leg_move: 5,
+        body_move: 4,
+    };
+
+    fn of(&self, role: Role) -> Nanos {
+        match role {
+            Role::Walk => self.walk,
+            Role::PlanGait(_) => self.plan_gait,
+            Role::LegMoveGoal(_) => self.lrp,
+            Role::LegMove(_) => self.leg_move,
+            Role::BodyMove(_) => self.body_move,
+        }
+    }
+}
+
+/// The walking system driven over a task tree.
+pub(crate) struct WalkSim {
+    pub(crate) tree: TaskTree,
+    pub(crate) now: Nanos,
+    mode: Mode,
+    steps: u32,
+    durations: Durations,
+    /// Role of each node, indexed by id.
+    roles: Vec<Option<Role>>,
+    walk: NodeId,
+    /// bodyMove of each step, indexed by step.
+    body_moves: Vec<NodeId>,
+    queues: [VecDeque<NodeId>; 4],
+    busy: [bool; 4],
+    running: BinaryHeap<Reverse<(Nanos, u64, NodeId)>>,
+    sequence: u64,
+    /// Handling starts, in order.
+    pub(crate) starts: Vec<(Nanos, Role)>,
+    /// When true, every op and event is kept.
+    pub(crate) record: bool,
+    pub(crate) ops: Vec<TreeOp>,
+    pub(crate) events: Vec<TreeEvent>,
+    /// Largest number of live nodes and estimated bytes seen (sampled per step).
+    pub(crate) peak_live: usize,
+    pub(crate) peak_bytes: usize,
+    pub(crate) nodes_added: u64,
+}
+
+impl WalkSim {
+    pub(crate) fn new(mode: Mode, steps: u32, durations: Durations) -> Self {
+        WalkSim {
+            tree: TaskTree::new(),
+            now: 0,
+            mode,
+            steps,
+            durations,
+            roles: vec![None],
+            walk: NodeId(0),
+            body_moves: vec![NodeId(0); steps as usize + 2],
+            queues: Default::default(),
+            busy: [false; 4],
+            running: BinaryHeap::new(),
+            sequence: 0,
+            starts: Vec::new(),
+            record: false,
+            ops: Vec::new(),
+            events: Vec::new(),
+            peak_live: 0,
+            peak_bytes: 0,
+            nodes_added: 0,
+        }
+    }
+
+    fn role(&self, id: NodeId) -> Option<Role> {
+        self.roles.get(id.0 as usize).copied().flatten()
+    }
+
+    fn take(&mut self, events: Vec<TreeEvent>) {
+        for e in &events {
+            if let TreeEvent::Ready(id) = e
+                && let Some(role) = self.role(*id)
+            {
+                self.queues[role.module()].push_back(*id);
+            }
+        }
+        if self.record {
+            self.events.extend(events);
+        }
+    }
+
+    fn add(&mut self, role: Role, parent: Option<NodeId>, with: Vec<NewConstraint>) -> NodeId {
+        let name = match role {
+            Role::Walk => "walk",
+            Role::PlanGait(_) => "planGait",
+            Role::LegMoveGoal(_) | Role::LegMove(_) => "legMove",
+            Role::BodyMove(_) => "bodyMove",
+        };
+        let mut spec = match role {
+            Role::LegMove(_) | Role::BodyMove(_) => NodeSpec::command(name, role.handler()),
+            _ => NodeSpec::goal(name, role.handler()),
+        };
+        spec.parent = parent;
+        spec.constraints = with;
+        let op_spec = self.record.then(|| spec.clone());
+        let (id, events) = self.tree.add_node(spec, self.now).expect("walking plan is valid");
+        if let Some(spec) = op_spec {
+            self.ops.push(TreeOp::AddNode {
+                id,
+                spec,
+                now: self.now,
+            });
+        }
+        self.nodes_added += 1;
+        let index = id.0 as usize;
+        if self.roles.len() <= index {
+            self.roles.resize(index + 1, None);
+        }
+        self.roles[index] = Some(role);
+        self.take(events);
+        id
+    }
+
+    /// What a handler issues just before it finishes.
+    fn issue(&mut self, id: NodeId, role: Role) {
+        match role {
+            Role::Walk => {
+                self.add(Role::PlanGait(1), Some(id), Vec::new());
+            }
+            Role::PlanGait(k) => {
+                let mut leg_with = Vec::new();
+                if k >= 2 {
+                    leg_with.push(NewConstraint::sequential_achievement_after(
+                        self.body_moves[k as usize - 1],
+                    ));
+                }
+                let leg = self.add(Role::LegMoveGoal(k), Some(id), leg_with);
+                let body = self.add(
+                    Role::BodyMove(k),
+                    Some(id),
+                    vec![NewConstraint::sequential_achievement_after(leg)],
+                );
+                self.body_moves[k as usize] = body;
+                if k < self.steps {
+                    let wait_for = match self.mode {
+                        Mode::Sequential => Some(body),
+                        Mode::Concurrent => (k >= 2).then(|| self.body_moves[k as usize - 1]),
+                    };
+                    let with = wait_for
+                        .map(NewConstraint::delay_planning_until)
+                        .into_iter()
+                        .collect();
+                    self.add(Role::PlanGait(k + 1), Some(self.walk), with);
+                }
+                self.sample();
+            }
+            Role::LegMoveGoal(k) => {
+                self.add(Role::LegMove(k), Some(id), Vec::new());
+            }
+            Role::LegMove(_) | Role::BodyMove(_) => {}
+        }
+    }
+
+    fn sample(&mut self) {
+        self.peak_live = self.peak_live.max(self.tree.len());
+        self.peak_bytes = self.peak_bytes.max(self.tree.estimated_bytes());
+    }
+
+    fn dispatch(&mut self) {
+        for module in 0..4 {
+            while !self.busy[module] {
+                let Some(id) = self.queues[module].pop_front() else {
+                    break;
+                };
+                if !self.tree.is_ready(id) {
+                    continue;
+                }
+                let events = self.tree.start(id, self.now).expect("ready node starts");
+                if self.record {
+                    self.ops.push(TreeOp::Start {
+                        node: id,
+                        now: self.now,
+                    });
+                }
+                self.take(events);
+                let Some(role) = self.role(id) else {
+                    continue;
+                };
+                self.starts.push((self.now, role));
+                self.busy[module] = true;
+                self.sequence += 1;
+                self.running.push(Reverse((
+                    self.now + self.durations.of(role),
+                    self.sequence,
+                    id,
+                )));
+            }
+        }
+    }
+
+    /// Walks every step; returns the time the walk goal was achieved.
+    pub(crate) fn run(&mut self) -> Nanos {
+        self.walk = self.add(Role::Walk, None, Vec::new());
+        self.dispatch();
+        while let Some(Reverse((at, _, id))) = self.running.pop() {
+            self.now = at;
+            let Some(role) = self.role(id) else {
+                continue;
+            };
+            self.issue(id, role);
+            let events = self
+                .tree
+                .finish(id, Outcome::Success, self.now)
+                .expect("running node finishes");
+            if self.record {
+                self.ops.push(TreeOp::Finish {
+                    node: id,
+                    outcome: Outcome::Success,
+                    now: self.now,
+                });
+            }
+            self.take(events);
+            self.busy[role.module()] = false;
+            self.dispatch();
+        }
+        self.now
+    }
+}
