@@ -35,13 +35,21 @@ impl TaskTree {
                 reason: blocker.describe(id),
             });
         }
-        if let Some(n) = self.nodes.get_mut(&id) {
+        let parent = self.nodes.get_mut(&id).and_then(|n| {
             n.state = NodeState::Handling;
             n.announced = false;
-        }
-        self.occur(id, Point::HandlingStart, now);
+            n.parent
+        });
         if kind == NodeKind::Command {
-            self.start_achievement(id, now);
+            // The ancestors' achievement starts first (outermost first), then the command
+            // starts, which is the start of its own achievement.
+            if let Some(p) = parent {
+                self.start_achievement(p, now);
+            }
+            self.occur(id, Point::HandlingStart, now);
+            self.occur(id, Point::AchievementStart, now);
+        } else {
+            self.occur(id, Point::HandlingStart, now);
         }
         // Children patched in under a node that had not started can now be ready.
         for c in self.live_children(id) {
@@ -135,9 +143,9 @@ mod tests {
         assert_eq!(
             events,
             vec![
-                TreeEvent::HandlingStarted(cmd),
                 TreeEvent::AchievementStarted(root),
                 TreeEvent::AchievementStarted(step),
+                TreeEvent::HandlingStarted(cmd),
                 TreeEvent::AchievementStarted(cmd),
             ]
         );
