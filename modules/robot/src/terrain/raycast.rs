@@ -29,9 +29,20 @@ pub(crate) struct MaxMip {
 
 #[derive(Debug, Clone, PartialEq)]
 struct Level {
-    nx: usize,
-    ny: usize,
+    /// Blocks along X and Y.
+    nx: i64,
+    ny: i64,
+    /// Side of a block in grid cells (2^level).
+    size: f64,
+    /// Highest corner in each block, row-major.
     max: Vec<f64>,
+}
+
+impl Level {
+    fn max_at(&self, cx: i64, cy: i64) -> f64 {
+        // Indices are kept within [0, nx) x [0, ny) by the caller; a miss reads as "solid".
+        self.max.get((cy * self.nx + cx) as usize).copied().unwrap_or(f64::INFINITY)
+    }
 }
 
 impl MaxMip {
@@ -46,18 +57,20 @@ impl MaxMip {
                 base.push(h[i].max(h[i + 1]).max(h[i + gnx]).max(h[i + gnx + 1]));
             }
         }
-        let mut levels = vec![Level { nx, ny, max: base }];
+        let mut levels = vec![Level { nx: nx as i64, ny: ny as i64, size: 1.0, max: base }];
         while let Some(prev) = levels.last().filter(|l| l.nx > 1 || l.ny > 1) {
-            let (cx, cy) = (prev.nx.div_ceil(2), prev.ny.div_ceil(2));
+            let (pnx, pny) = (prev.nx as usize, prev.ny as usize);
+            let (cx, cy) = (pnx.div_ceil(2), pny.div_ceil(2));
             let mut max = vec![f64::NEG_INFINITY; cx * cy];
-            for iy in 0..prev.ny {
-                for ix in 0..prev.nx {
-                    let v = prev.max[iy * prev.nx + ix];
+            for iy in 0..pny {
+                for ix in 0..pnx {
+                    let v = prev.max[iy * pnx + ix];
                     let slot = &mut max[(iy / 2) * cx + ix / 2];
                     *slot = slot.max(v);
                 }
             }
-            levels.push(Level { nx: cx, ny: cy, max });
+            let size = prev.size * 2.0;
+            levels.push(Level { nx: cx as i64, ny: cy as i64, size, max });
         }
         Self { levels }
     }
@@ -115,60 +128,78 @@ impl HeightField {
         if t_lo.is_nan() || t_hi.is_nan() || t_lo > t_hi {
             return None;
         }
-        let t_hit = self.march(g0, gd, origin.z, d.z, t_lo, t_hi)?;
+        let ray = GridRay { g0, gd, z0: origin.z, dz: d.z };
+        let (t_hit, ix, iy) = self.march(&ray, t_lo, t_hi)?;
         let point = origin + d * t_hit;
-        let (ix, iy, u, v) = self.patch_at(point.x, point.y);
+        let (u, v) = (
+            (ray.g0[0] + ray.gd[0] * t_hit - ix as f64).clamp(0.0, 1.0),
+            (ray.g0[1] + ray.gd[1] * t_hit - iy as f64).clamp(0.0, 1.0),
+        );
         Some(RayHit { point, range_m: t_hit, normal: self.patch_normal(ix, iy, u, v) })
     }
 
-    /// Walks the max mip-map from `t_lo` to `t_hi`; returns the ray parameter of the hit.
-    fn march(&self, g0: [f64; 2], gd: [f64; 2], z0: f64, dz: f64, t_lo: f64, t_hi: f64) -> Option<f64> {
+    /// Walks the max mip-map from `t_lo` to `t_hi`; returns the ray parameter of the hit and
+    /// the patch hit.
+    fn march(&self, ray: &GridRay, t_lo: f64, t_hi: f64) -> Option<(f64, usize, usize)> {
         let levels = &self.mip.levels;
         let top = levels.len() - 1;
-        let inv = [
-            if gd[0] != 0.0 { 1.0 / gd[0] } else { f64::INFINITY },
-            if gd[1] != 0.0 { 1.0 / gd[1] } else { f64::INFINITY },
-        ];
-        let step = [sign_step(gd[0]), sign_step(gd[1])];
+        let [g0x, g0y] = ray.g0;
+        let [gdx, gdy] = ray.gd;
+        let (z0, dz) = (ray.z0, ray.dz);
+        let (sx, sy) = (sign_step(gdx), sign_step(gdy));
+        let (inv_x, inv_y) = (1.0 / gdx, 1.0 / gdy);
+        // Which face of a block the ray leaves by: the upper one when stepping up.
+        let (off_x, off_y) = (if sx > 0 { 1.0 } else { 0.0 }, if sy > 0 { 1.0 } else { 0.0 });
+        let descending = dz <= 0.0;
+
         let mut level = top;
         let mut t = t_lo;
-        let start = [g0[0] + gd[0] * t, g0[1] + gd[1] * t];
-        let mut cell = [
-            cell_of(start[0], level, levels[level].nx),
-            cell_of(start[1], level, levels[level].ny),
-        ];
+        let block_of = |g: f64, lv: &Level, n: i64| -> i64 {
+            let c = g / lv.size;
+            // Truncation is the floor for c >= 0; the ray is clipped to the grid.
+            if c >= 0.0 { (c as i64).min(n - 1) } else { 0 }
+        };
+        let mut cx = block_of(g0x + gdx * t, &levels[level], levels[level].nx);
+        let mut cy = block_of(g0y + gdy * t, &levels[level], levels[level].ny);
         loop {
-            let lv = &levels[level];
-            let size = (1u64 << level) as f64;
-            let mut t_axis = [f64::INFINITY; 2];
-            for a in 0..2 {
-                if step[a] != 0 {
-                    let lo = cell[a] as f64 * size;
-                    let boundary = if step[a] > 0 { lo + size } else { lo };
-                    t_axis[a] = (boundary - g0[a]) * inv[a];
-                }
+            // Go down while the block reaches the ray's height here: such a block can never
+            // be skipped. The child is chosen by the ray's position at `t`, ties broken
+            // toward the direction of travel.
+            let z_t = z0 + dz * t;
+            while level > 0 && levels[level].max_at(cx, cy) >= z_t {
+                let half = 0.5 * levels[level].size;
+                let child = &levels[level - 1];
+                let (px, py) = (g0x + gdx * t, g0y + gdy * t);
+                let (mid_x, mid_y) = ((2 * cx + 1) as f64 * half, (2 * cy + 1) as f64 * half);
+                let right = px > mid_x || (px == mid_x && sx > 0);
+                let up = py > mid_y || (py == mid_y && sy > 0);
+                cx = (2 * cx + i64::from(right)).min(child.nx - 1);
+                cy = (2 * cy + i64::from(up)).min(child.ny - 1);
+                level -= 1;
             }
-            let t_exit = t_axis[0].min(t_axis[1]).min(t_hi);
-            let z_min = (z0 + dz * t).min(z0 + dz * t_exit);
-            let cell_max = lv.max.get(cell[1] * lv.nx + cell[0]).copied().unwrap_or(f64::INFINITY);
-            if z_min <= cell_max {
+            let lv = &levels[level];
+            let size = lv.size;
+            let tx = if sx != 0 { ((cx as f64 + off_x) * size - g0x) * inv_x } else { f64::INFINITY };
+            let ty = if sy != 0 { ((cy as f64 + off_y) * size - g0y) * inv_y } else { f64::INFINITY };
+            let t_face = if tx <= ty { tx } else { ty };
+            let t_exit = if t_face < t_hi { t_face } else { t_hi };
+            let z_min = if descending { z0 + dz * t_exit } else { z_t };
+            if z_min <= lv.max_at(cx, cy) {
                 if level == 0 {
-                    if let Some(hit) = self.intersect_patch(cell[0], cell[1], g0, gd, z0, dz, t, t_exit) {
-                        return Some(hit);
+                    if let Some(hit) = self.intersect_patch(cx as usize, cy as usize, ray, t, t_exit) {
+                        return Some((hit, cx as usize, cy as usize));
                     }
                 } else {
-                    // Descend into the child that the ray is in just after `t`.
-                    let probe = t + (t_exit - t) * 1e-7;
+                    // The ray dips into this block before leaving it: look at its children
+                    // from the entry point.
+                    let half = 0.5 * size;
                     let child = &levels[level - 1];
-                    let half = (1u64 << (level - 1)) as f64;
-                    for a in 0..2 {
-                        let n = if a == 0 { child.nx } else { child.ny };
-                        let g = g0[a] + gd[a] * probe;
-                        let lo = cell[a] * 2;
-                        let hi = (lo + 1).min(n - 1);
-                        let c = if g.is_finite() && g >= 0.0 { (g / half) as usize } else { 0 };
-                        cell[a] = c.clamp(lo, hi);
-                    }
+                    let (px, py) = (g0x + gdx * t, g0y + gdy * t);
+                    let (mid_x, mid_y) = ((2 * cx + 1) as f64 * half, (2 * cy + 1) as f64 * half);
+                    let right = px > mid_x || (px == mid_x && sx > 0);
+                    let up = py > mid_y || (py == mid_y && sy > 0);
+                    cx = (2 * cx + i64::from(right)).min(child.nx - 1);
+                    cy = (2 * cy + i64::from(up)).min(child.ny - 1);
                     level -= 1;
                     continue;
                 }
@@ -177,53 +208,53 @@ impl HeightField {
                 return None;
             }
             t = t_exit;
-            let old = cell;
-            let axis = if t_axis[0] <= t_axis[1] { 0 } else { 1 };
-            let n = if axis == 0 { lv.nx } else { lv.ny };
-            let next = cell[axis] as i64 + step[axis];
-            if next < 0 || next >= n as i64 {
-                return None;
+            let (old_x, old_y) = (cx, cy);
+            if tx <= ty {
+                cx += sx;
+                if cx < 0 || cx >= lv.nx {
+                    return None;
+                }
+            } else {
+                cy += sy;
+                if cy < 0 || cy >= lv.ny {
+                    return None;
+                }
             }
-            cell[axis] = next as usize;
-            // Climb while the step crossed the boundary of a bigger block too.
-            let mut prev = old;
-            while level < top && (cell[0] >> 1 != prev[0] >> 1 || cell[1] >> 1 != prev[1] >> 1) {
-                cell = [cell[0] >> 1, cell[1] >> 1];
-                prev = [prev[0] >> 1, prev[1] >> 1];
+            // Climb while the step crossed the boundary of a bigger block too, but only into
+            // blocks whose top is below the ray here (others would send it straight back down).
+            let z_here = z0 + dz * t;
+            let (mut prev_x, mut prev_y) = (old_x, old_y);
+            while level < top && (cx >> 1 != prev_x >> 1 || cy >> 1 != prev_y >> 1) {
+                let (up_x, up_y) = (cx >> 1, cy >> 1);
+                if z_here <= levels[level + 1].max_at(up_x, up_y) {
+                    break;
+                }
+                (cx, cy) = (up_x, up_y);
+                (prev_x, prev_y) = (prev_x >> 1, prev_y >> 1);
                 level += 1;
             }
         }
     }
 
     /// Exact intersection of the ray with bilinear patch (ix, iy) for t in [t0, t1].
-    #[allow(clippy::too_many_arguments)]
-    fn intersect_patch(
-        &self,
-        ix: usize,
-        iy: usize,
-        g0: [f64; 2],
-        gd: [f64; 2],
-        z0: f64,
-        dz: f64,
-        t0: f64,
-        t1: f64,
-    ) -> Option<f64> {
+    fn intersect_patch(&self, ix: usize, iy: usize, ray: &GridRay, t0: f64, t1: f64) -> Option<f64> {
         let [h00, h10, h01, h11] = self.corners(ix, iy);
         let (e, f, g) = (h10 - h00, h01 - h00, h00 - h10 - h01 + h11);
-        let u0 = g0[0] + gd[0] * t0 - ix as f64;
-        let v0 = g0[1] + gd[1] * t0 - iy as f64;
-        let (a, b) = (gd[0], gd[1]);
-        let zs = z0 + dz * t0;
+        let u0 = ray.g0[0] + ray.gd[0] * t0 - ix as f64;
+        let v0 = ray.g0[1] + ray.gd[1] * t0 - iy as f64;
+        let (a, b) = (ray.gd[0], ray.gd[1]);
+        let zs = ray.z0 + ray.dz * t0;
         // F(s) = z(s) - h(u(s), v(s)) = C + B s + A s^2, s = t - t0.
         let c = zs - (h00 + e * u0 + f * v0 + g * u0 * v0);
         if c <= 0.0 {
             return Some(t0);
         }
-        let bq = dz - e * a - f * b - g * (u0 * b + v0 * a);
+        let bq = ray.dz - e * a - f * b - g * (u0 * b + v0 * a);
         let aq = -g * a * b;
         let s1 = t1 - t0;
-        let root = if aq.abs() < 1e-12 * (bq.abs() + 1e-300) || aq == 0.0 {
-            if bq < 0.0 { Some(-c / bq) } else { None }
+        let in_range = |s: &f64| *s >= 0.0 && *s <= s1 * (1.0 + 1e-12) + 1e-15;
+        let root = if aq == 0.0 || aq.abs() < 1e-12 * bq.abs() {
+            (bq < 0.0).then(|| -c / bq)
         } else {
             let disc = bq * bq - 4.0 * aq * c;
             if disc < 0.0 {
@@ -232,11 +263,19 @@ impl HeightField {
                 let q = -0.5 * (bq + bq.signum() * disc.sqrt());
                 let r1 = q / aq;
                 let r2 = if q != 0.0 { c / q } else { f64::INFINITY };
-                [r1, r2].into_iter().filter(|r| *r >= 0.0 && *r <= s1 * (1.0 + 1e-12) + 1e-15).reduce(f64::min)
+                [r1, r2].into_iter().filter(in_range).reduce(f64::min)
             }
         };
-        root.filter(|s| *s >= 0.0 && *s <= s1 * (1.0 + 1e-12) + 1e-15).map(|s| t0 + s.min(s1))
+        root.filter(in_range).map(|s| t0 + s.min(s1))
     }
+}
+
+/// A ray in grid coordinates: XY `g0 + gd t` (cells), Z `z0 + dz t` (metres).
+struct GridRay {
+    g0: [f64; 2],
+    gd: [f64; 2],
+    z0: f64,
+    dz: f64,
 }
 
 fn sign_step(v: f64) -> i64 {
@@ -247,12 +286,6 @@ fn sign_step(v: f64) -> i64 {
     } else {
         0
     }
-}
-
-fn cell_of(g: f64, level: usize, n: usize) -> usize {
-    let size = (1u64 << level) as f64;
-    let c = if g.is_finite() && g > 0.0 { (g / size) as usize } else { 0 };
-    c.min(n - 1)
 }
 
 #[cfg(test)]
