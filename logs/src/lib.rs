@@ -1,1 +1,32 @@
-//! TCA traffic log: MCAP writer, reader, display and statistics.
+//! The TCA traffic log (§3.1, §3.3 of the report: "the ability to log all message traffic has
+//! proven invaluable in detecting timing problems and interface errors").
+//!
+//! Central records every frame in and out, every link event and registration, every task-tree
+//! operation and every problem with bad input, in an MCAP file (see [`layout`] for the mapping).
+//! A log survives `kill -9` of central: the writer flushes every 50 ms, and the reader reads a
+//! file cut short up to its last complete record.
+//!
+//! # Layout
+//!
+//! - [`record`]: the record types central produces.
+//! - [`layout`]: how records map onto MCAP channels, schemas and encodings.
+//! - [`writer`]: [`LogWriter`] (MCAP) and [`LogSink`], the writer on its own thread.
+//! - [`reader`]: [`LogFile`], reading a log back (lenient about a truncated tail).
+//! - [`show`]: rendering a log as readable lines with filters.
+//! - [`error`]: [`LogError`].
+
+pub mod error;
+pub mod layout;
+pub mod reader;
+pub mod record;
+pub mod show;
+pub mod writer;
+
+pub use error::{LogError, Result};
+pub use reader::{KnownFormat, LogFile};
+pub use record::{
+    Direction, FrameRecord, LinkEvent, LinkRecord, LogRecord, ProblemRecord, RecordKind,
+    RegisteredRecord, TreeRecord,
+};
+pub use show::{ShowFilter, render};
+pub use writer::{FLUSH_INTERVAL, LogSink, LogWriter};

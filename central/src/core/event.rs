@@ -1,0 +1,32 @@
+//! What goes into and comes out of the core.
+
+use bytes::Bytes;
+use tca_logs::LogRecord;
+
+/// A transport link, numbered by the adapter that opened it. The number is also the high half
+/// of every message id the module on it sends.
+pub type LinkId = u32;
+
+/// Something that happened to central.
+#[derive(Clone, Debug)]
+pub enum Event {
+    /// A link opened (the module will say hello next).
+    Opened(LinkId),
+    /// A frame arrived on a link.
+    Frame(LinkId, Bytes),
+    /// A link closed: the module left or crashed.
+    Closed(LinkId),
+    /// Time passed: check deadlines (waiting messages that are too old).
+    Tick,
+}
+
+/// Something central wants done.
+#[derive(Clone, Debug)]
+pub enum Action {
+    /// Send a frame on a link.
+    Send(LinkId, Bytes),
+    /// Append a record to the traffic log.
+    Log(LogRecord),
+    /// Close a link (after a refused hello or a protocol violation).
+    Close(LinkId),
+}

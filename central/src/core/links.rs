@@ -1,0 +1,181 @@
+//! Links and modules: hello, welcome, refusal, bye, and what happens when a link closes.
+
+use std::collections::VecDeque;
+
+use tca_logs::{LinkEvent, LinkRecord, LogRecord, RecordKind};
+use tca_messages::control::{Hello, Welcome, names};
+use tca_messages::{
+    Class, Envelope, MessageName, ModuleName, RouteError, decode_data, encode_data,
+};
+
+use super::{Action, Central, Link, LinkId, ModuleState};
+
+impl Central {
+    pub(super) fn link_opened(&mut self, link: LinkId, out: &mut Vec<Action>) {
+        if self.links.contains_key(&link) {
+            return;
+        }
+        self.links.insert(link, Link { module: None });
+        self.log_link(link, LinkEvent::Opened, None, String::new(), out);
+    }
+
+    /// The first frame on a link must be a hello.
+    pub(super) fn before_hello(&mut self, link: LinkId, envelope: Envelope, out: &mut Vec<Action>) {
+        if envelope.class != Class::Control || envelope.name.as_str() != names::HELLO {
+            let reason = format!(
+                "the first frame on a link must be {} (got {} {}); connect with the module library",
+                names::HELLO,
+                envelope.class,
+                envelope.name
+            );
+            return self.refuse(link, &envelope, reason, out);
+        }
+        let hello: Hello = match decode_data(&envelope.data) {
+            Ok(h) => h,
+            Err(err) => return self.refuse(link, &envelope, format!("bad hello: {err}"), out),
+        };
+        if hello.module != envelope.sender {
+            let reason = format!(
+                "hello names module {} but the envelope's sender is {}",
+                hello.module, envelope.sender
+            );
+            return self.refuse(link, &envelope, reason, out);
+        }
+        if hello.module.as_str() == self.central_name.as_str() {
+            let reason = "the module name \"central\" is reserved; choose another".to_owned();
+            return self.refuse(link, &envelope, reason, out);
+        }
+        if let Some(existing) = self.modules.get(&hello.module) {
+            if let Some(other) = existing.link {
+                let reason = format!(
+                    "a module named {} is already connected (link {other}, pid {} on {}); \
+                     choose another name or stop that one first",
+                    hello.module, existing.hello.pid, existing.hello.host
+                );
+                return self.refuse(link, &envelope, reason, out);
+            }
+        }
+        let capacity = if hello.capacity == 0 {
+            self.config.default_capacity.max(1)
+        } else {
+            hello.capacity
+        } as usize;
+        let name = hello.module.clone();
+        let detail = format!("pid {} on {}, capacity {capacity}", hello.pid, hello.host);
+        match self.modules.get_mut(&name) {
+            Some(state) => {
+                // A module coming back: keep what waits for it; it is delivered once the module
+                // registers its handlers again.
+                state.link = Some(link);
+                state.hello = hello;
+                state.capacity = capacity;
+                state.running = 0;
+                state.down_since = None;
+            }
+            None => {
+                self.modules.insert(
+                    name.clone(),
+                    ModuleState {
+                        link: Some(link),
+                        hello,
+                        capacity,
+                        running: 0,
+                        ready: VecDeque::new(),
+                        waiting: VecDeque::new(),
+                        down_since: None,
+                    },
+                );
+            }
+        }
+        if let Some(l) = self.links.get_mut(&link) {
+            l.module = Some(name.clone());
+        }
+        tracing::info!(module = %name, link, "module connected");
+        self.log_link(link, LinkEvent::Connected, Some(name.clone()), detail, out);
+        let welcome = Welcome {
+            link,
+            central_version: env!("CARGO_PKG_VERSION").to_owned(),
+        };
+        let data = encode_data(&welcome).unwrap_or_default();
+        let reply = self.central_envelope(
+            Class::Control,
+            control_name(names::WELCOME),
+            Some(envelope.id),
+            data,
+        );
+        self.send(link, &reply, out);
+    }
+
+    fn refuse(&mut self, link: LinkId, envelope: &Envelope, reason: String, out: &mut Vec<Action>) {
+        tracing::warn!(link, %reason, "connection refused");
+        self.log_link(
+            link,
+            LinkEvent::Refused,
+            Some(envelope.sender.clone()),
+            reason.clone(),
+            out,
+        );
+        self.send_error(link, envelope, RouteError::Refused { reason }, out);
+        out.push(Action::Close(link));
+        self.links.remove(&link);
+    }
+
+    /// A module said goodbye: same as its link closing, but announced.
+    pub(super) fn bye(&mut self, link: LinkId, out: &mut Vec<Action>) {
+        self.link_closed(link, out);
+        out.push(Action::Close(link));
+    }
+
+    pub(super) fn link_closed(&mut self, link: LinkId, out: &mut Vec<Action>) {
+        let Some(state) = self.links.remove(&link) else {
+            return;
+        };
+        let Some(module) = state.module else {
+            self.log_link(link, LinkEvent::Closed, None, String::new(), out);
+            return;
+        };
+        tracing::info!(%module, link, "module disconnected");
+        self.log_link(
+            link,
+            LinkEvent::Closed,
+            Some(module.clone()),
+            String::new(),
+            out,
+        );
+        let now = self.now;
+        if let Some(m) = self.modules.get_mut(&module) {
+            m.link = None;
+            m.running = 0;
+            m.down_since = Some(now);
+            for w in m.waiting.iter_mut() {
+                w.since_ns = now;
+            }
+        }
+        self.fail_queries_of(&module, out);
+        self.requeue_tasks_of(&module, out);
+    }
+
+    pub(super) fn log_link(
+        &mut self,
+        link: LinkId,
+        event: LinkEvent,
+        module: Option<ModuleName>,
+        detail: String,
+        out: &mut Vec<Action>,
+    ) {
+        out.push(Action::Log(LogRecord {
+            at_ns: self.now,
+            kind: RecordKind::Link(LinkRecord {
+                link,
+                event,
+                module,
+                detail,
+            }),
+        }));
+    }
+}
+
+/// A control message name (the constants are valid names).
+pub(super) fn control_name(name: &'static str) -> MessageName {
+    MessageName::new(name).unwrap_or_else(|_| unreachable!("control names are valid"))
+}

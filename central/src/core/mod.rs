@@ -1,0 +1,375 @@
+//! The sans-I/O core of central control: `handle(event) -> actions`.
+//!
+//! The core owns all of central's state: links, modules, the registry, open queries, tasks and
+//! the task tree. It never blocks, never does I/O and never reads a clock: the driver passes the
+//! time with each event and carries out the [`Action`]s it returns (send a frame, append a log
+//! record, close a link). This keeps it fast, deterministic and testable without sockets.
+//!
+//! Submodules, by concern:
+//! - `links`: hello, bye, link closed, the module table;
+//! - `registry`: registrations and their data formats;
+//! - `routing`: queries, informs, exceptions and the answers to them;
+//! - `tasks`: goals and commands, the task tree, capacity and dispatch;
+//! - `waiting`: messages held for modules that are down, with their bounds;
+//! - `tree`: the adapter to `tca-task-tree`.
+
+mod event;
+mod links;
+mod registry;
+mod routing;
+mod tasks;
+mod tree;
+mod waiting;
+
+#[cfg(test)]
+mod tests;
+
+use std::collections::{BTreeMap, HashMap, VecDeque};
+
+use bytes::Bytes;
+use tca_logs::{Direction, FrameRecord, LogRecord, ProblemRecord, RecordKind};
+use tca_messages::control::{CENTRAL, Hello};
+use tca_messages::{
+    Class, Envelope, MessageId, MessageName, ModuleName, RouteError, SendOptions, encode,
+    encode_data,
+};
+
+pub use event::{Action, Event, LinkId};
+
+use crate::config::CentralConfig;
+use registry::Entry;
+use routing::OpenQuery;
+use tasks::Task;
+use tree::Tree;
+use waiting::Waiting;
+
+/// Central control's state machine.
+pub struct Central {
+    config: CentralConfig,
+    links: HashMap<LinkId, Link>,
+    modules: HashMap<ModuleName, ModuleState>,
+    registry: BTreeMap<MessageName, Entry>,
+    folded: HashMap<String, MessageName>,
+    queries: HashMap<MessageId, OpenQuery>,
+    tasks: HashMap<MessageId, Task>,
+    node_task: HashMap<u64, MessageId>,
+    tree: Tree,
+    central_name: ModuleName,
+    seq: u32,
+    now: u64,
+    counters: Counters,
+}
+
+/// Running totals, for statistics and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counters {
+    /// Frames received.
+    pub frames_in: u64,
+    /// Frames sent.
+    pub frames_out: u64,
+    /// Frames refused as malformed.
+    pub bad_frames: u64,
+    /// Errors sent to senders.
+    pub errors_sent: u64,
+}
+
+/// A transport link.
+#[derive(Debug)]
+struct Link {
+    module: Option<ModuleName>,
+}
+
+/// What central knows of a module, connected or not.
+#[derive(Debug)]
+struct ModuleState {
+    link: Option<LinkId>,
+    hello: Hello,
+    capacity: usize,
+    running: usize,
+    /// Tasks whose constraints hold, in the order they became ready.
+    ready: VecDeque<MessageId>,
+    /// Queries, informs and exceptions held while the module is down.
+    waiting: VecDeque<Waiting>,
+    /// When the module went down (None while connected).
+    down_since: Option<u64>,
+}
+
+impl Central {
+    /// A central with the given configuration and no links.
+    pub fn new(config: CentralConfig) -> Self {
+        Central {
+            config,
+            links: HashMap::new(),
+            modules: HashMap::new(),
+            registry: BTreeMap::new(),
+            folded: HashMap::new(),
+            queries: HashMap::new(),
+            tasks: HashMap::new(),
+            node_task: HashMap::new(),
+            tree: Tree::default(),
+            central_name: ModuleName::new(CENTRAL).unwrap_or_else(|_| unreachable!()),
+            seq: 0,
+            now: 0,
+            counters: Counters::default(),
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &CentralConfig {
+        &self.config
+    }
+
+    /// Running totals.
+    pub fn counters(&self) -> Counters {
+        self.counters
+    }
+
+    /// Handles one event at time `now_ns` (nanoseconds since the UNIX epoch), appending the
+    /// resulting actions to `out`.
+    pub fn handle(&mut self, now_ns: u64, event: Event, out: &mut Vec<Action>) {
+        self.now = self.now.max(now_ns);
+        match event {
+            Event::Opened(link) => self.link_opened(link, out),
+            Event::Frame(link, frame) => self.frame(link, frame, out),
+            Event::Closed(link) => self.link_closed(link, out),
+            Event::Tick => self.expire_waiting(out),
+        }
+    }
+
+    /// When the core next needs a [`Event::Tick`], if ever.
+    pub fn next_deadline(&self) -> Option<u64> {
+        self.earliest_expiry()
+    }
+
+    /// Connected module names, sorted.
+    pub fn connected_modules(&self) -> Vec<ModuleName> {
+        let mut names: Vec<ModuleName> = self
+            .modules
+            .iter()
+            .filter(|(_, m)| m.link.is_some())
+            .map(|(n, _)| n.clone())
+            .collect();
+        names.sort();
+        names
+    }
+
+    /// Live task-tree nodes.
+    pub fn live_nodes(&self) -> usize {
+        self.tree.len()
+    }
+
+    /// The task trees as indented text.
+    pub fn render_tree(&self) -> String {
+        self.tree.render()
+    }
+
+    fn frame(&mut self, link: LinkId, frame: Bytes, out: &mut Vec<Action>) {
+        self.counters.frames_in += 1;
+        let Some(state) = self.links.get(&link) else {
+            // A frame on a link nobody opened: treat it as opened now (zenoh may deliver the
+            // first frame before the liveliness event).
+            self.link_opened(link, out);
+            return self.frame(link, frame, out);
+        };
+        let peer = state.module.clone();
+        let envelope = match tca_messages::decode(&frame, self.config.max_frame_bytes) {
+            Ok(e) => e,
+            Err(err) => {
+                self.counters.bad_frames += 1;
+                self.problem(Some(link), peer.clone(), err.to_string(), &frame, out);
+                // Answer with an error envelope when the sender is known; close otherwise.
+                match peer {
+                    Some(_) => {
+                        let error = RouteError::BadFrame {
+                            reason: err.to_string(),
+                        };
+                        self.send_error_raw(link, None, error, out);
+                    }
+                    None => out.push(Action::Close(link)),
+                }
+                return;
+            }
+        };
+        self.log_frame(Direction::In, link, peer.clone(), &envelope, frame, out);
+        let Some(module) = peer else {
+            return self.before_hello(link, envelope, out);
+        };
+        if envelope.sender != module {
+            let reason = format!(
+                "the frame says it is from {}, but this link belongs to module {module}",
+                envelope.sender
+            );
+            self.problem(Some(link), Some(module), reason.clone(), &[], out);
+            return self.send_error(link, &envelope, RouteError::BadFrame { reason }, out);
+        }
+        if envelope.id.link() != link {
+            let reason = format!(
+                "message id {} does not carry this link's number {link}; use the link number \
+                 from the welcome",
+                envelope.id
+            );
+            self.problem(Some(link), Some(module), reason.clone(), &[], out);
+            return self.send_error(link, &envelope, RouteError::BadFrame { reason }, out);
+        }
+        match envelope.class {
+            Class::Query | Class::Inform | Class::Exception => {
+                self.route_by_name(link, module, envelope, out)
+            }
+            Class::Goal | Class::Command => self.new_task(link, module, envelope, out),
+            Class::Reply => self.answer_query(link, module, envelope, out),
+            Class::Success | Class::Failure => self.handler_done(link, module, envelope, out),
+            Class::Control => self.control(link, module, envelope, out),
+            Class::Error => {
+                let reason = "modules may not send class error; answer a query with reply or \
+                              failure"
+                    .to_owned();
+                self.send_error(link, &envelope, RouteError::BadFrame { reason }, out)
+            }
+            other => {
+                let reason = format!("class {other} is not understood by this central");
+                self.send_error(link, &envelope, RouteError::BadFrame { reason }, out)
+            }
+        }
+    }
+
+    /// A fresh id for a message central originates.
+    fn next_id(&mut self) -> MessageId {
+        self.seq = self.seq.wrapping_add(1);
+        MessageId::new(0, self.seq)
+    }
+
+    /// Builds an envelope sent by central.
+    fn central_envelope(
+        &mut self,
+        class: Class,
+        name: MessageName,
+        correlation: Option<MessageId>,
+        data: Vec<u8>,
+    ) -> Envelope {
+        Envelope {
+            id: self.next_id(),
+            class,
+            name,
+            sender: self.central_name.clone(),
+            context: None,
+            node: None,
+            correlation,
+            timestamp_ns: self.now,
+            options: SendOptions::default(),
+            redelivery: 0,
+            data,
+        }
+    }
+
+    /// Encodes and sends an envelope on a link, logging it.
+    fn send(&mut self, link: LinkId, envelope: &Envelope, out: &mut Vec<Action>) {
+        match encode(envelope) {
+            Ok(frame) => {
+                let frame = Bytes::from(frame);
+                let peer = self.links.get(&link).and_then(|l| l.module.clone());
+                self.log_frame(Direction::Out, link, peer, envelope, frame.clone(), out);
+                self.counters.frames_out += 1;
+                out.push(Action::Send(link, frame));
+            }
+            Err(err) => self.problem(Some(link), None, err.to_string(), &[], out),
+        }
+    }
+
+    /// Sends `error` about `about` back on `link`.
+    fn send_error(
+        &mut self,
+        link: LinkId,
+        about: &Envelope,
+        error: RouteError,
+        out: &mut Vec<Action>,
+    ) {
+        self.send_error_named(link, Some((about.id, about.name.clone())), error, out);
+    }
+
+    fn send_error_raw(
+        &mut self,
+        link: LinkId,
+        about: Option<MessageId>,
+        error: RouteError,
+        out: &mut Vec<Action>,
+    ) {
+        let name = MessageName::new("tca.error").unwrap_or_else(|_| unreachable!());
+        self.send_error_named(link, about.map(|id| (id, name)), error, out);
+    }
+
+    fn send_error_named(
+        &mut self,
+        link: LinkId,
+        about: Option<(MessageId, MessageName)>,
+        error: RouteError,
+        out: &mut Vec<Action>,
+    ) {
+        tracing::debug!(link, %error, "error to sender");
+        self.counters.errors_sent += 1;
+        let data = encode_data(&error).unwrap_or_default();
+        let (correlation, name) = match about {
+            Some((id, name)) => (Some(id), name),
+            None => (
+                None,
+                MessageName::new("tca.error").unwrap_or_else(|_| unreachable!()),
+            ),
+        };
+        let env = self.central_envelope(Class::Error, name, correlation, data);
+        self.send(link, &env, out);
+    }
+
+    /// Sends an error to a module by name, if it is connected.
+    fn send_error_to_module(
+        &mut self,
+        module: &ModuleName,
+        about: &Envelope,
+        error: RouteError,
+        out: &mut Vec<Action>,
+    ) {
+        if let Some(link) = self.modules.get(module).and_then(|m| m.link) {
+            self.send_error(link, about, error, out);
+        }
+    }
+
+    fn log_frame(
+        &mut self,
+        direction: Direction,
+        link: LinkId,
+        peer: Option<ModuleName>,
+        envelope: &Envelope,
+        frame: Bytes,
+        out: &mut Vec<Action>,
+    ) {
+        out.push(Action::Log(LogRecord {
+            at_ns: self.now,
+            kind: RecordKind::Frame(FrameRecord {
+                direction,
+                link,
+                peer,
+                name: envelope.name.clone(),
+                class: envelope.class,
+                frame,
+            }),
+        }));
+    }
+
+    fn problem(
+        &mut self,
+        link: Option<LinkId>,
+        module: Option<ModuleName>,
+        error: String,
+        frame: &[u8],
+        out: &mut Vec<Action>,
+    ) {
+        tracing::warn!(?link, ?module, %error, "bad input");
+        out.push(Action::Log(LogRecord {
+            at_ns: self.now,
+            kind: RecordKind::Problem(ProblemRecord {
+                link,
+                module,
+                error,
+                frame_prefix: frame.iter().take(64).copied().collect(),
+            }),
+        }));
+    }
+}

@@ -1,0 +1,222 @@
+//! Queries, informs and exceptions: routed by name; and the replies that answer queries.
+
+use serde::Serialize;
+use tca_messages::control::{Constrain, Kill, TreeView, names};
+use tca_messages::{
+    Class, Envelope, MessageId, MessageName, ModuleName, RouteError, decode_data, encode_data,
+};
+
+use super::waiting::Waiting;
+use super::{Action, Central, LinkId};
+
+/// A query on its way to its handler or waiting for the reply.
+#[derive(Clone, Debug)]
+pub(super) struct OpenQuery {
+    pub(super) asker: ModuleName,
+    pub(super) handler: ModuleName,
+    pub(super) name: MessageName,
+}
+
+impl Central {
+    /// Queries, informs and exceptions go to the module registered for their name.
+    pub(super) fn route_by_name(
+        &mut self,
+        link: LinkId,
+        sender: ModuleName,
+        envelope: Envelope,
+        out: &mut Vec<Action>,
+    ) {
+        let handler = match self.lookup(&envelope) {
+            Ok(entry) => entry.handler.clone(),
+            Err(err) => return self.send_error(link, &envelope, err, out),
+        };
+        if envelope.class == Class::Query {
+            self.queries.insert(
+                envelope.id,
+                OpenQuery {
+                    asker: sender,
+                    handler: handler.clone(),
+                    name: envelope.name.clone(),
+                },
+            );
+        }
+        self.deliver_or_wait(link, &handler, envelope, out);
+    }
+
+    /// Sends to the handler if it is connected, else holds the message (within bounds).
+    fn deliver_or_wait(
+        &mut self,
+        sender_link: LinkId,
+        handler: &ModuleName,
+        envelope: Envelope,
+        out: &mut Vec<Action>,
+    ) {
+        match self.modules.get(handler).and_then(|m| m.link) {
+            Some(hlink) => self.send(hlink, &envelope, out),
+            None => {
+                if let Err(err) = self.hold(handler, Waiting::new(envelope.clone(), self.now)) {
+                    self.queries.remove(&envelope.id);
+                    self.send_error(sender_link, &envelope, err, out);
+                }
+            }
+        }
+    }
+
+    /// A handler's reply to a query goes back to the module that asked.
+    pub(super) fn answer_query(
+        &mut self,
+        link: LinkId,
+        module: ModuleName,
+        envelope: Envelope,
+        out: &mut Vec<Action>,
+    ) {
+        let Some(query_id) = envelope.correlation else {
+            let reason = "a reply must name the query it answers (correlation)".to_owned();
+            return self.send_error(link, &envelope, RouteError::BadFrame { reason }, out);
+        };
+        self.forward_answer(link, module, query_id, envelope, out);
+    }
+
+    /// Forwards a reply or a query failure to the asker.
+    pub(super) fn forward_answer(
+        &mut self,
+        link: LinkId,
+        module: ModuleName,
+        query_id: MessageId,
+        envelope: Envelope,
+        out: &mut Vec<Action>,
+    ) {
+        match self.queries.get(&query_id) {
+            Some(q) if q.handler == module => {}
+            Some(_) | None => {
+                // Late answers (the asker gave up or died) are logged and dropped.
+                let reason = format!(
+                    "{} answers query {query_id}, which is not open for module {module}",
+                    envelope.class
+                );
+                self.problem(Some(link), Some(module), reason, &[], out);
+                return;
+            }
+        }
+        let Some(q) = self.queries.remove(&query_id) else {
+            return;
+        };
+        if let Some(asker_link) = self.modules.get(&q.asker).and_then(|m| m.link) {
+            self.send(asker_link, &envelope, out);
+        }
+    }
+
+    /// Every query a module was handling, or held for it, fails at once when it goes down.
+    pub(super) fn fail_queries_of(&mut self, module: &ModuleName, out: &mut Vec<Action>) {
+        // Queries the dead module asked: nobody waits for their answers any more.
+        self.queries.retain(|_, q| &q.asker != module);
+        // Queries sent to the dead module: tell each asker now.
+        let held: std::collections::HashSet<MessageId> = self
+            .modules
+            .get(module)
+            .map(|m| m.waiting.iter().map(|w| w.envelope.id).collect())
+            .unwrap_or_default();
+        let lost: Vec<(MessageId, ModuleName, MessageName)> = self
+            .queries
+            .iter()
+            .filter(|(id, q)| &q.handler == module && !held.contains(id))
+            .map(|(id, q)| (*id, q.asker.clone(), q.name.clone()))
+            .collect();
+        for (id, asker, name) in lost {
+            self.queries.remove(&id);
+            let Some(link) = self.modules.get(&asker).and_then(|m| m.link) else {
+                continue;
+            };
+            let error = RouteError::HandlerDied {
+                module: module.to_string(),
+            };
+            let data = encode_data(&error).unwrap_or_default();
+            let env = self.central_envelope(Class::Error, name, Some(id), data);
+            self.counters.errors_sent += 1;
+            self.send(link, &env, out);
+        }
+    }
+
+    /// Central's own control requests.
+    pub(super) fn control(
+        &mut self,
+        link: LinkId,
+        module: ModuleName,
+        envelope: Envelope,
+        out: &mut Vec<Action>,
+    ) {
+        match envelope.name.as_str() {
+            names::REGISTER => self.register(link, module, envelope, out),
+            names::REGISTRY => {
+                let view = self.registry_view();
+                self.reply_control(link, &envelope, &view, out);
+            }
+            names::BYE => self.bye(link, out),
+            names::TREE => {
+                let view = TreeView {
+                    text: self.tree.render(),
+                    nodes: self.tree.len() as u64,
+                };
+                self.reply_control(link, &envelope, &view, out);
+            }
+            names::KILL => match decode_data::<Kill>(&envelope.data) {
+                Ok(kill) => match self.kill_node(kill.node, Some(envelope.id), out) {
+                    Ok(()) => self.reply_control(link, &envelope, &(), out),
+                    Err(reason) => {
+                        self.send_error(link, &envelope, RouteError::Tree { reason }, out)
+                    }
+                },
+                Err(err) => self.send_error(
+                    link,
+                    &envelope,
+                    RouteError::BadFrame {
+                        reason: err.to_string(),
+                    },
+                    out,
+                ),
+            },
+            names::CONSTRAIN => match decode_data::<Constrain>(&envelope.data) {
+                Ok(c) => match self.add_constraint(c.constraint, None, Some(envelope.id), out) {
+                    Ok(()) => self.reply_control(link, &envelope, &(), out),
+                    Err(reason) => {
+                        self.send_error(link, &envelope, RouteError::Tree { reason }, out)
+                    }
+                },
+                Err(err) => self.send_error(
+                    link,
+                    &envelope,
+                    RouteError::BadFrame {
+                        reason: err.to_string(),
+                    },
+                    out,
+                ),
+            },
+            other => {
+                let reason = format!(
+                    "unknown control message {other:?}; this central understands {}, {}, {}, \
+                     {}, {} and {}",
+                    names::REGISTER,
+                    names::REGISTRY,
+                    names::TREE,
+                    names::KILL,
+                    names::CONSTRAIN,
+                    names::BYE
+                );
+                self.send_error(link, &envelope, RouteError::Refused { reason }, out)
+            }
+        }
+    }
+
+    /// Answers a control request with a `Reply` carrying `value`.
+    pub(super) fn reply_control<T: Serialize>(
+        &mut self,
+        link: LinkId,
+        request: &Envelope,
+        value: &T,
+        out: &mut Vec<Action>,
+    ) {
+        let data = encode_data(value).unwrap_or_default();
+        let env = self.central_envelope(Class::Reply, request.name.clone(), Some(request.id), data);
+        self.send(link, &env, out);
+    }
+}

@@ -1,0 +1,440 @@
+//! Tests of the core without any transport: events in, actions out.
+
+use std::time::Duration;
+
+use bytes::Bytes;
+use serde::{Deserialize, Serialize};
+use tca_messages::control::{
+    Hello, Register, RegisterOutcome, Registration, TaskEnded, TaskOutcome, Welcome, names,
+};
+use tca_messages::*;
+
+use super::*;
+
+const MS: u64 = 1_000_000;
+
+#[derive(Serialize, Deserialize)]
+struct Target {
+    y_m: f64,
+}
+
+#[derive(Serialize, Deserialize)]
+struct TargetDeg {
+    y_deg: f64,
+}
+
+struct Harness {
+    central: Central,
+    now: u64,
+    seq: u32,
+}
+
+impl Harness {
+    fn new() -> Self {
+        Self::with(CentralConfig {
+            max_waiting: 3,
+            max_wait: Duration::from_millis(500),
+            ..CentralConfig::default()
+        })
+    }
+
+    fn with(config: CentralConfig) -> Self {
+        Harness {
+            central: Central::new(config),
+            now: 1_000 * MS,
+            seq: 0,
+        }
+    }
+
+    fn step(&mut self, event: Event) -> Vec<(LinkId, Envelope)> {
+        let mut out = Vec::new();
+        self.central.handle(self.now, event, &mut out);
+        out.into_iter()
+            .filter_map(|a| match a {
+                Action::Send(link, frame) => Some((link, decode(&frame, usize::MAX).unwrap())),
+                _ => None,
+            })
+            .collect()
+    }
+
+    fn envelope(
+        &mut self,
+        link: LinkId,
+        module: &str,
+        class: Class,
+        name: &str,
+        data: Vec<u8>,
+    ) -> Envelope {
+        self.seq += 1;
+        Envelope {
+            id: MessageId::new(link, self.seq),
+            class,
+            name: MessageName::new(name).unwrap(),
+            sender: ModuleName::new(module).unwrap(),
+            context: None,
+            node: None,
+            correlation: None,
+            timestamp_ns: self.now,
+            options: SendOptions::default(),
+            redelivery: 0,
+            data,
+        }
+    }
+
+    fn send(&mut self, link: LinkId, env: &Envelope) -> Vec<(LinkId, Envelope)> {
+        self.step(Event::Frame(link, Bytes::from(encode(env).unwrap())))
+    }
+
+    fn connect(&mut self, link: LinkId, module: &str, capacity: u32) -> Vec<(LinkId, Envelope)> {
+        self.step(Event::Opened(link));
+        let hello = Hello {
+            module: ModuleName::new(module).unwrap(),
+            capacity,
+            pid: 1,
+            host: "test".into(),
+        };
+        let mut env = self.envelope(
+            link,
+            module,
+            Class::Control,
+            names::HELLO,
+            encode_data(&hello).unwrap(),
+        );
+        env.id = MessageId::new(0, 0);
+        self.send(link, &env)
+    }
+
+    fn register<T: serde::de::DeserializeOwned>(
+        &mut self,
+        link: LinkId,
+        module: &str,
+        name: &str,
+        class: Class,
+        replace: bool,
+    ) -> RegisterOutcome {
+        let reg = Registration {
+            name: MessageName::new(name).unwrap(),
+            class,
+            format: DataFormat::of::<T>().unwrap(),
+            reply: (class == Class::Query).then(|| DataFormat::of::<f64>().unwrap()),
+            replace,
+        };
+        let data = encode_data(&Register { entries: vec![reg] }).unwrap();
+        let env = self.envelope(link, module, Class::Control, names::REGISTER, data);
+        let sent = self.send(link, &env);
+        let reply = sent
+            .iter()
+            .find(|(l, e)| *l == link && e.class == Class::Reply && e.correlation == Some(env.id))
+            .expect("registration answered");
+        decode_data(&reply.1.data).unwrap()
+    }
+
+    fn register_sent<T: serde::de::DeserializeOwned>(
+        &mut self,
+        link: LinkId,
+        module: &str,
+        name: &str,
+        class: Class,
+    ) -> Vec<(LinkId, Envelope)> {
+        let reg = Registration {
+            name: MessageName::new(name).unwrap(),
+            class,
+            format: DataFormat::of::<T>().unwrap(),
+            reply: (class == Class::Query).then(|| DataFormat::of::<f64>().unwrap()),
+            replace: false,
+        };
+        let data = encode_data(&Register { entries: vec![reg] }).unwrap();
+        let env = self.envelope(link, module, Class::Control, names::REGISTER, data);
+        self.send(link, &env)
+    }
+
+    fn done(
+        &mut self,
+        link: LinkId,
+        module: &str,
+        task: &Envelope,
+        ok: bool,
+    ) -> Vec<(LinkId, Envelope)> {
+        let (class, data) = if ok {
+            (Class::Success, encode_data(&()).unwrap())
+        } else {
+            (
+                Class::Failure,
+                encode_data(&Failure {
+                    reason: "no".into(),
+                })
+                .unwrap(),
+            )
+        };
+        let mut env = self.envelope(link, module, class, task.name.as_str(), data);
+        env.correlation = Some(task.id);
+        self.send(link, &env)
+    }
+}
+
+fn error_of(env: &Envelope) -> RouteError {
+    assert_eq!(env.class, Class::Error, "{env:?}");
+    decode_data(&env.data).unwrap()
+}
+
+fn target(y: f64) -> Vec<u8> {
+    encode_data(&Target { y_m: y }).unwrap()
+}
+
+#[test]
+fn hello_is_welcomed_and_a_second_module_of_the_same_name_refused() {
+    let mut h = Harness::new();
+    let sent = h.connect(1, "ctl", 1);
+    assert_eq!(sent.len(), 1);
+    let welcome: Welcome = decode_data(&sent[0].1.data).unwrap();
+    assert_eq!(welcome.link, 1);
+    let sent = h.connect(2, "ctl", 1);
+    let err = error_of(&sent[0].1);
+    assert!(err.to_string().contains("already connected"), "{err}");
+    assert_eq!(h.central.connected_modules().len(), 1);
+}
+
+#[test]
+fn the_first_frame_must_be_a_hello() {
+    let mut h = Harness::new();
+    h.step(Event::Opened(4));
+    let env = h.envelope(4, "x", Class::Query, "q", vec![]);
+    let mut out = Vec::new();
+    h.central.handle(
+        h.now,
+        Event::Frame(4, Bytes::from(encode(&env).unwrap())),
+        &mut out,
+    );
+    assert!(out.iter().any(|a| matches!(a, Action::Close(4))));
+}
+
+#[test]
+fn queries_are_routed_and_answered() {
+    let mut h = Harness::new();
+    h.connect(1, "ctl", 1);
+    h.connect(2, "gait", 1);
+    assert!(
+        h.register::<Target>(1, "ctl", "bodyPosition", Class::Query, false)
+            .refused
+            .is_empty()
+    );
+    let q = h.envelope(2, "gait", Class::Query, "bodyPosition", target(1.0));
+    let sent = h.send(2, &q);
+    assert_eq!(sent.len(), 1);
+    assert_eq!(sent[0].0, 1, "delivered to the handler");
+    assert_eq!(sent[0].1.id, q.id);
+    let mut reply = h.envelope(
+        1,
+        "ctl",
+        Class::Reply,
+        "bodyPosition",
+        encode_data(&2.5f64).unwrap(),
+    );
+    reply.correlation = Some(q.id);
+    let sent = h.send(1, &reply);
+    assert_eq!(sent.len(), 1);
+    assert_eq!(sent[0].0, 2, "reply goes back to the asker");
+    assert_eq!(decode_data::<f64>(&sent[0].1.data).unwrap(), 2.5);
+}
+
+#[test]
+fn unknown_names_get_an_error_with_a_suggestion() {
+    let mut h = Harness::new();
+    h.connect(1, "ctl", 1);
+    h.register::<Target>(1, "ctl", "bodyMove", Class::Command, false);
+    let c = h.envelope(1, "ctl", Class::Command, "body_move", target(1.0));
+    let sent = h.send(1, &c);
+    let err = error_of(&sent[0].1);
+    assert!(matches!(err, RouteError::UnknownMessage { .. }));
+    assert!(
+        err.to_string().contains("did you mean \"bodyMove\""),
+        "{err}"
+    );
+    assert_eq!(sent[0].1.correlation, Some(c.id));
+}
+
+#[test]
+fn a_differing_format_is_refused_naming_the_field() {
+    let mut h = Harness::new();
+    h.connect(1, "a", 1);
+    h.connect(2, "b", 1);
+    h.register::<Target>(1, "a", "bodyMove", Class::Command, false);
+    let outcome = h.register::<TargetDeg>(2, "b", "bodyMove", Class::Command, true);
+    assert_eq!(outcome.refused.len(), 1);
+    let reason = &outcome.refused[0].1;
+    assert!(reason.contains("$.y_m"), "{reason}");
+    assert!(reason.contains("y_deg"), "{reason}");
+}
+
+#[test]
+fn a_second_handler_needs_replace_and_then_takes_over() {
+    let mut h = Harness::new();
+    h.connect(1, "sim", 1);
+    h.connect(2, "real", 1);
+    h.connect(3, "gait", 1);
+    h.register::<Target>(1, "sim", "bodyMove", Class::Command, false);
+    let refused = h.register::<Target>(2, "real", "bodyMove", Class::Command, false);
+    assert!(
+        refused.refused[0]
+            .1
+            .contains("already handled by module sim")
+    );
+    let ok = h.register::<Target>(2, "real", "bodyMove", Class::Command, true);
+    assert!(ok.refused.is_empty());
+    let c = h.envelope(3, "gait", Class::Command, "bodyMove", target(1.0));
+    let sent = h.send(3, &c);
+    assert_eq!(sent[0].0, 2, "the replacement handles it");
+}
+
+#[test]
+fn commands_wait_for_capacity_and_run_in_order() {
+    let mut h = Harness::new();
+    h.connect(1, "ctl", 1);
+    h.connect(2, "gait", 1);
+    h.register::<Target>(1, "ctl", "bodyMove", Class::Command, false);
+    let a = h.envelope(2, "gait", Class::Command, "bodyMove", target(1.0));
+    let b = h.envelope(2, "gait", Class::Command, "bodyMove", target(2.0));
+    let sent = h.send(2, &a);
+    assert_eq!(sent.len(), 1);
+    assert!(sent[0].1.node.is_some(), "delivered with its node");
+    let sent = h.send(2, &b);
+    assert!(sent.is_empty(), "b waits: capacity 1");
+    let sent = h.done(1, "ctl", &a, true);
+    assert_eq!(sent.len(), 1);
+    assert_eq!(sent[0].1.id, b.id, "b goes once a is done");
+}
+
+#[test]
+fn messages_wait_for_a_module_that_is_down_and_are_delivered_when_it_returns() {
+    let mut h = Harness::new();
+    h.connect(1, "ctl", 1);
+    h.connect(2, "gait", 1);
+    h.register::<Target>(1, "ctl", "bodyPosition", Class::Query, false);
+    h.step(Event::Closed(1));
+    let q = h.envelope(2, "gait", Class::Query, "bodyPosition", target(0.0));
+    assert!(h.send(2, &q).is_empty(), "held");
+    h.now += 100 * MS;
+    h.connect(3, "ctl", 1);
+    let sent = h.register_sent::<Target>(3, "ctl", "bodyPosition", Class::Query);
+    let delivered = sent
+        .iter()
+        .find(|(_, e)| e.id == q.id)
+        .expect("held query delivered");
+    assert_eq!(delivered.0, 3);
+    assert!(
+        h.central.next_deadline().is_none(),
+        "nothing is held any more"
+    );
+}
+
+#[test]
+fn held_messages_are_bounded_by_count_and_age() {
+    let mut h = Harness::new();
+    h.connect(1, "ctl", 1);
+    h.connect(2, "gait", 1);
+    h.register::<Target>(1, "ctl", "bodyPosition", Class::Query, false);
+    h.step(Event::Closed(1));
+    for _ in 0..3 {
+        let q = h.envelope(2, "gait", Class::Query, "bodyPosition", target(0.0));
+        assert!(h.send(2, &q).is_empty());
+    }
+    let q = h.envelope(2, "gait", Class::Query, "bodyPosition", target(0.0));
+    let err = error_of(&h.send(2, &q)[0].1);
+    assert!(
+        matches!(err, RouteError::QueueFull { limit: 3, .. }),
+        "{err}"
+    );
+    let deadline = h.central.next_deadline().unwrap();
+    assert_eq!(deadline, h.now + 500 * MS);
+    h.now = deadline;
+    let sent = h.step(Event::Tick);
+    assert_eq!(sent.len(), 3);
+    for (link, env) in sent {
+        assert_eq!(link, 2);
+        assert!(matches!(error_of(&env), RouteError::Expired { .. }));
+    }
+}
+
+#[test]
+fn a_query_in_flight_fails_at_once_when_its_handler_dies() {
+    let mut h = Harness::new();
+    h.connect(1, "ltm", 1);
+    h.connect(2, "gait", 1);
+    h.register::<Target>(1, "ltm", "map", Class::Query, false);
+    let q = h.envelope(2, "gait", Class::Query, "map", target(0.0));
+    h.send(2, &q);
+    let sent = h.step(Event::Closed(1));
+    let err = error_of(&sent[0].1);
+    assert!(matches!(err, RouteError::HandlerDied { .. }), "{err}");
+    assert_eq!(sent[0].1.correlation, Some(q.id));
+}
+
+#[test]
+fn a_running_command_is_redelivered_after_its_handler_restarts() {
+    let mut h = Harness::new();
+    h.connect(1, "ctl", 1);
+    h.connect(2, "gait", 1);
+    h.register::<Target>(1, "ctl", "bodyMove", Class::Command, false);
+    let mut c = h.envelope(2, "gait", Class::Command, "bodyMove", target(3.0));
+    c.options.notify = true;
+    assert_eq!(h.send(2, &c).len(), 1);
+    h.step(Event::Closed(1));
+    h.connect(3, "ctl", 1);
+    let sent = h.register_sent::<Target>(3, "ctl", "bodyMove", Class::Command);
+    let again = sent
+        .iter()
+        .find(|(_, e)| e.id == c.id)
+        .expect("redelivered");
+    assert_eq!(again.0, 3);
+    assert_eq!(again.1.redelivery, 1);
+    let sent = h.done(3, "ctl", &c, true);
+    let ended = sent
+        .iter()
+        .find(|(_, e)| e.name.as_str() == names::TASK_ENDED)
+        .unwrap();
+    assert_eq!(ended.0, 2);
+    let ended: TaskEnded = decode_data(&ended.1.data).unwrap();
+    assert_eq!(ended.outcome, TaskOutcome::Achieved);
+}
+
+#[test]
+fn malformed_frames_get_an_error_and_central_keeps_serving() {
+    let mut h = Harness::new();
+    h.connect(1, "ctl", 1);
+    h.connect(2, "gait", 1);
+    h.register::<Target>(1, "ctl", "bodyPosition", Class::Query, false);
+    for junk in [&b""[..], &[9, 9, 9][..], &[1, 0xff, 0xff][..]] {
+        let sent = h.step(Event::Frame(2, Bytes::copy_from_slice(junk)));
+        assert!(matches!(error_of(&sent[0].1), RouteError::BadFrame { .. }));
+    }
+    let q = h.envelope(2, "gait", Class::Query, "bodyPosition", target(0.0));
+    assert_eq!(h.send(2, &q)[0].0, 1, "still routing");
+    assert_eq!(h.central.counters().bad_frames, 3);
+}
+
+#[test]
+fn frames_over_the_size_limit_are_refused() {
+    let mut h = Harness::with(CentralConfig {
+        max_frame_bytes: 64,
+        ..CentralConfig::default()
+    });
+    h.connect(1, "ctl", 1);
+    let big = h.envelope(1, "ctl", Class::Inform, "x", vec![0; 200]);
+    let sent = h.send(1, &big);
+    let err = error_of(&sent[0].1);
+    assert!(err.to_string().contains("exceeds the limit"), "{err}");
+}
+
+#[test]
+fn forged_sender_and_ids_are_refused() {
+    let mut h = Harness::new();
+    h.connect(1, "ctl", 1);
+    h.connect(2, "gait", 1);
+    let forged = h.envelope(2, "ctl", Class::Inform, "x", vec![]);
+    let err = error_of(&h.send(2, &forged)[0].1);
+    assert!(err.to_string().contains("belongs to module gait"), "{err}");
+    let mut wrong_id = h.envelope(2, "gait", Class::Inform, "x", vec![]);
+    wrong_id.id = MessageId::new(1, 99);
+    let err = error_of(&h.send(2, &wrong_id)[0].1);
+    assert!(err.to_string().contains("link's number"), "{err}");
+}

@@ -1,0 +1,269 @@
+//! Writing records into an MCAP file, and the background sink central uses.
+
+use std::collections::{BTreeMap, HashMap};
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
+use tca_messages::control::Registration;
+use tca_messages::{DataFormat, MessageName};
+
+use crate::error::{LogError, Result};
+use crate::layout::*;
+use crate::record::{
+    LinkRecord, LogRecord, ProblemRecord, RecordKind, RegisteredRecord, TreeRecord,
+};
+
+/// How often the sink closes the current chunk and hands it to the operating system, so a
+/// `kill -9` of central loses at most about this much of the log.
+pub const FLUSH_INTERVAL: Duration = Duration::from_millis(50);
+
+/// Writes records to an MCAP file.
+pub struct LogWriter {
+    path: PathBuf,
+    mcap: mcap::Writer<BufWriter<File>>,
+    /// Current schema version per message name (bumped by each registration that changes it).
+    formats: HashMap<MessageName, (u32, String)>,
+    /// Channel per (name, schema version).
+    frame_channels: HashMap<(MessageName, u32), u16>,
+    record_channels: HashMap<&'static str, u16>,
+    sequence: u32,
+}
+
+impl LogWriter {
+    /// Creates (or truncates) the log file.
+    pub fn create(path: &Path) -> Result<Self> {
+        let io = |source| LogError::Io {
+            path: path.to_owned(),
+            source,
+        };
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(io)?;
+        }
+        let file = File::create(path).map_err(io)?;
+        let mcap = mcap::WriteOptions::new()
+            .profile(PROFILE)
+            .library(concat!("tca-logs ", env!("CARGO_PKG_VERSION")))
+            .compression(None)
+            .chunk_size(Some(256 * 1024))
+            .create(BufWriter::with_capacity(256 * 1024, file))
+            .map_err(|e| LogError::Write(e.to_string()))?;
+        Ok(LogWriter {
+            path: path.to_owned(),
+            mcap,
+            formats: HashMap::new(),
+            frame_channels: HashMap::new(),
+            record_channels: HashMap::new(),
+            sequence: 0,
+        })
+    }
+
+    /// The file written.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Appends one record.
+    pub fn append(&mut self, record: &LogRecord) -> Result<()> {
+        match &record.kind {
+            RecordKind::Frame(f) => {
+                let channel = self.frame_channel(&f.name)?;
+                let data = postcard::to_allocvec(f).map_err(|e| LogError::Write(e.to_string()))?;
+                self.write(channel, record.at_ns, &data)
+            }
+            RecordKind::Registered(r) => {
+                self.note_registration(&r.registration);
+                self.write_record::<RegisteredRecord>(REGISTERED_TOPIC, record.at_ns, r)
+            }
+            RecordKind::Link(r) => self.write_record::<LinkRecord>(LINK_TOPIC, record.at_ns, r),
+            RecordKind::Tree(r) => self.write_record::<TreeRecord>(TREE_TOPIC, record.at_ns, r),
+            RecordKind::Problem(r) => {
+                self.write_record::<ProblemRecord>(PROBLEM_TOPIC, record.at_ns, r)
+            }
+        }
+    }
+
+    /// Closes the current chunk and flushes it to the operating system.
+    pub fn flush(&mut self) -> Result<()> {
+        self.mcap
+            .flush()
+            .map_err(|e| LogError::Write(e.to_string()))
+    }
+
+    /// Writes the summary and closes the file.
+    pub fn finish(mut self) -> Result<()> {
+        self.mcap
+            .finish()
+            .map_err(|e| LogError::Write(e.to_string()))?;
+        Ok(())
+    }
+
+    fn write(&mut self, channel: u16, at_ns: u64, data: &[u8]) -> Result<()> {
+        self.sequence = self.sequence.wrapping_add(1);
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: self.sequence,
+            log_time: at_ns,
+            publish_time: at_ns,
+        };
+        self.mcap
+            .write_to_known_channel(&header, data)
+            .map_err(|e| LogError::Write(e.to_string()))
+    }
+
+    fn write_record<T: Serialize + serde::de::DeserializeOwned>(
+        &mut self,
+        topic: &'static str,
+        at_ns: u64,
+        value: &T,
+    ) -> Result<()> {
+        let channel = match self.record_channels.get(topic) {
+            Some(&c) => c,
+            None => {
+                let schema = DataFormat::of::<T>()
+                    .ok()
+                    .and_then(|f| serde_json::to_vec(&serde_json::json!({ "format": f })).ok())
+                    .unwrap_or_default();
+                let schema_id = self
+                    .mcap
+                    .add_schema(topic, FORMAT_SCHEMA_ENCODING, &schema)
+                    .map_err(|e| LogError::Write(e.to_string()))?;
+                let c = self
+                    .mcap
+                    .add_channel(schema_id, topic, RECORD_ENCODING, &BTreeMap::new())
+                    .map_err(|e| LogError::Write(e.to_string()))?;
+                self.record_channels.insert(topic, c);
+                c
+            }
+        };
+        let data = postcard::to_allocvec(value).map_err(|e| LogError::Write(e.to_string()))?;
+        self.write(channel, at_ns, &data)
+    }
+
+    fn note_registration(&mut self, reg: &Registration) {
+        let schema = serde_json::json!({
+            "class": reg.class.as_str(),
+            "format": reg.format,
+            "reply": reg.reply,
+        })
+        .to_string();
+        match self.formats.get_mut(&reg.name) {
+            Some((_, s)) if *s == schema => {}
+            Some((version, s)) => {
+                *version += 1;
+                *s = schema;
+            }
+            None => {
+                self.formats.insert(reg.name.clone(), (1, schema));
+            }
+        }
+    }
+
+    fn frame_channel(&mut self, name: &MessageName) -> Result<u16> {
+        let (version, schema) = self
+            .formats
+            .get(name)
+            .cloned()
+            .unwrap_or_else(|| (0, "{}".to_owned()));
+        if let Some(&c) = self.frame_channels.get(&(name.clone(), version)) {
+            return Ok(c);
+        }
+        let schema_id = self
+            .mcap
+            .add_schema(name.as_str(), FORMAT_SCHEMA_ENCODING, schema.as_bytes())
+            .map_err(|e| LogError::Write(e.to_string()))?;
+        let channel = self
+            .mcap
+            .add_channel(schema_id, name.as_str(), FRAME_ENCODING, &BTreeMap::new())
+            .map_err(|e| LogError::Write(e.to_string()))?;
+        self.frame_channels.insert((name.clone(), version), channel);
+        Ok(channel)
+    }
+}
+
+enum SinkInput {
+    Record(LogRecord),
+    Finish,
+}
+
+/// A log writer on its own thread: `append` never blocks central on disk I/O. The thread
+/// flushes every [`FLUSH_INTERVAL`], so the file is readable up to ~50 ms before a crash.
+pub struct LogSink {
+    tx: mpsc::Sender<SinkInput>,
+    thread: Option<JoinHandle<Result<()>>>,
+}
+
+impl LogSink {
+    /// Creates the file and starts the writer thread.
+    pub fn create(path: &Path) -> Result<Self> {
+        let writer = LogWriter::create(path)?;
+        let (tx, rx) = mpsc::channel();
+        let thread = std::thread::Builder::new()
+            .name("tca-log".into())
+            .spawn(move || run_sink(writer, rx))
+            .map_err(|e| LogError::WriterGone(e.to_string()))?;
+        Ok(LogSink {
+            tx,
+            thread: Some(thread),
+        })
+    }
+
+    /// Queues a record.
+    pub fn append(&mut self, record: LogRecord) {
+        if self.tx.send(SinkInput::Record(record)).is_err() {
+            tracing::error!("log writer thread has stopped; traffic is no longer logged");
+        }
+    }
+
+    /// Writes what is queued, the summary, and closes the file.
+    pub fn finish(mut self) -> Result<()> {
+        let _ = self.tx.send(SinkInput::Finish);
+        match self.thread.take() {
+            Some(t) => t
+                .join()
+                .map_err(|_| LogError::WriterGone("writer thread panicked".into()))?,
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for LogSink {
+    fn drop(&mut self) {
+        if let Some(t) = self.thread.take() {
+            let _ = self.tx.send(SinkInput::Finish);
+            let _ = t.join();
+        }
+    }
+}
+
+fn run_sink(mut writer: LogWriter, rx: mpsc::Receiver<SinkInput>) -> Result<()> {
+    let mut dirty = false;
+    let mut last_flush = Instant::now();
+    loop {
+        let wait = FLUSH_INTERVAL.saturating_sub(last_flush.elapsed());
+        match rx.recv_timeout(wait) {
+            Ok(SinkInput::Record(r)) => {
+                if let Err(e) = writer.append(&r) {
+                    tracing::error!(error = %e, "cannot write log record");
+                }
+                dirty = true;
+            }
+            Ok(SinkInput::Finish) | Err(mpsc::RecvTimeoutError::Disconnected) => break,
+            Err(mpsc::RecvTimeoutError::Timeout) => {}
+        }
+        if dirty && last_flush.elapsed() >= FLUSH_INTERVAL {
+            writer.flush()?;
+            dirty = false;
+            last_flush = Instant::now();
+        }
+    }
+    // Drain anything still queued before closing.
+    while let Ok(SinkInput::Record(r)) = rx.try_recv() {
+        writer.append(&r)?;
+    }
+    writer.finish()
+}
