@@ -168,7 +168,9 @@ impl TaskTree {
             )));
         };
         if pn.kind == NodeKind::Query {
-            return Err(bad(format!("its parent {p} is a query, and queries are leaves")));
+            return Err(bad(format!(
+                "its parent {p} is a query, and queries are leaves"
+            )));
         }
         if pn.state == NodeState::Failed || pn.is_finished() {
             return Err(bad(format!(
@@ -224,7 +226,10 @@ impl TaskTree {
             })
             .collect();
         for a in holders {
-            self.link(Constraint::new(id.handling_end(), a.achievement_start()), linked)?;
+            self.link(
+                Constraint::new(id.handling_end(), a.achievement_start()),
+                linked,
+            )?;
         }
         Ok(())
     }
@@ -303,6 +308,9 @@ impl TaskTree {
             });
         }
         if let Some(n) = self.nodes.get_mut(&c.after.node) {
+            if n.waits_on.capacity() == 0 {
+                n.waits_on.reserve_exact(1); // most points wait on one constraint
+            }
             n.waits_on.push(Edge {
                 own: c.after.point,
                 other: c.before,
@@ -310,6 +318,9 @@ impl TaskTree {
             n.blockers[c.after.point.index()] += 1;
         }
         if let Some(n) = self.nodes.get_mut(&c.before.node) {
+            if n.gates.capacity() == 0 {
+                n.gates.reserve_exact(1);
+            }
             n.gates.push(Edge {
                 own: c.before.point,
                 other: c.after,
@@ -371,7 +382,10 @@ mod tests {
         let n3 = b.goal(Some(n2), "legMove");
         let err = b
             .tree
-            .add_constraint(Constraint::new(n3.achievement_end(), n2.handling_start()), 9)
+            .add_constraint(
+                Constraint::new(n3.achievement_end(), n2.handling_start()),
+                9,
+            )
             .expect_err("cycle");
         assert_eq!(
             err.to_string(),
@@ -438,7 +452,11 @@ mod tests {
         let done = b.command(root, "done", &[]);
         b.run(done);
         assert!(b.tree.was_retired(done));
-        let next = b.command(root, "next", &[NewConstraint::sequential_achievement_after(done)]);
+        let next = b.command(
+            root,
+            "next",
+            &[NewConstraint::sequential_achievement_after(done)],
+        );
         assert!(b.tree.is_ready(next));
         let err = b
             .tree

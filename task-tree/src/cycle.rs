@@ -26,13 +26,62 @@ use crate::point::{Endpoint, Point};
 use crate::state::NodeKind;
 use crate::tree::TaskTree;
 
-/// Scratch maps and queues reused across searches.
+/// Below this many entries a visited set is a plain list: most searches touch a handful
+/// of points, and scanning a few words beats hashing them.
+const LINEAR_LIMIT: usize = 32;
+
+/// Visited points of one side of the search: point key -> the key it was reached from.
+#[derive(Debug, Default, Clone)]
+struct Visited {
+    list: Vec<(u64, u64)>,
+    map: IdMap<u64, u64>,
+}
+
+impl Visited {
+    fn get(&self, key: u64) -> Option<u64> {
+        if self.map.is_empty() {
+            self.list.iter().find(|(k, _)| *k == key).map(|(_, v)| *v)
+        } else {
+            self.map.get(&key).copied()
+        }
+    }
+
+    fn contains(&self, key: u64) -> bool {
+        self.get(key).is_some()
+    }
+
+    fn insert(&mut self, key: u64, from: u64) {
+        if self.map.is_empty() && self.list.len() < LINEAR_LIMIT {
+            self.list.push((key, from));
+            return;
+        }
+        if self.map.is_empty() {
+            self.map.extend(self.list.drain(..));
+        }
+        self.map.insert(key, from);
+    }
+
+    fn len(&self) -> usize {
+        self.list.len() + self.map.len()
+    }
+
+    fn capacity(&self) -> usize {
+        self.list.capacity() + self.map.capacity()
+    }
+
+    fn clear(&mut self) {
+        self.list.clear();
+        self.map.clear();
+    }
+}
+
+/// Scratch sets and queues reused across searches.
 #[derive(Debug, Default, Clone)]
 pub(crate) struct SearchScratch {
     /// Point key -> the point it was reached from (itself for the start).
-    forward: IdMap<u64, u64>,
+    forward: Visited,
     /// Point key -> the point it leads to (itself for the goal).
-    backward: IdMap<u64, u64>,
+    backward: Visited,
     forward_queue: VecDeque<u64>,
     backward_queue: VecDeque<u64>,
     buffer: Vec<u64>,
@@ -57,7 +106,9 @@ impl SearchScratch {
 
     pub(crate) fn estimated_bytes(&self) -> usize {
         (self.forward.capacity() + self.backward.capacity()) * (2 * size_of::<u64>() + 1)
-            + (self.forward_queue.capacity() + self.backward_queue.capacity() + self.buffer.capacity())
+            + (self.forward_queue.capacity()
+                + self.backward_queue.capacity()
+                + self.buffer.capacity())
                 * size_of::<u64>()
     }
 
@@ -66,7 +117,7 @@ impl SearchScratch {
         let limit = self.forward.len() + self.backward.len() + 1;
         let mut path = vec![meet];
         let mut k = meet;
-        while let Some(&prev) = self.forward.get(&k) {
+        while let Some(prev) = self.forward.get(k) {
             if prev == k || path.len() > limit {
                 break;
             }
@@ -75,7 +126,7 @@ impl SearchScratch {
         }
         path.reverse();
         let mut k = meet;
-        while let Some(&next) = self.backward.get(&k) {
+        while let Some(next) = self.backward.get(k) {
             if next == k || path.len() > 2 * limit {
                 break;
             }
@@ -97,18 +148,17 @@ impl TaskTree {
         }
     }
 
-    /// True if the point is in the graph: live node, not a query, not finished, point
-    /// not occurred.
-    fn in_graph(&self, ep: Endpoint) -> bool {
-        self.nodes.get(&ep.node).is_some_and(|n| {
-            n.kind != NodeKind::Query && !n.is_finished() && !n.occurred(ep.point)
-        })
-    }
-
     fn push_point(&self, out: &mut Vec<u64>, ep: Endpoint) {
-        let ep = self.canonical(ep);
-        if self.in_graph(ep) {
-            out.push(ep.key());
+        let Some(node) = self.nodes.get(&ep.node) else {
+            return;
+        };
+        let point = match (node.kind, ep.point) {
+            (NodeKind::Query, _) => return,
+            (NodeKind::Command, Point::AchievementStart) => Point::HandlingStart,
+            (_, p) => p,
+        };
+        if !node.is_finished() && !node.occurred(point) {
+            out.push(Endpoint::new(ep.node, point).key());
         }
     }
 
@@ -228,11 +278,11 @@ impl TaskTree {
                 self.successors(Endpoint::from_key(k), &mut buffer);
                 let mut meet = None;
                 for &n in &buffer {
-                    if s.forward.contains_key(&n) {
+                    if s.forward.contains(n) {
                         continue;
                     }
                     s.forward.insert(n, k);
-                    if s.backward.contains_key(&n) {
+                    if s.backward.contains(n) {
                         meet = Some(n);
                         break;
                     }
@@ -248,11 +298,11 @@ impl TaskTree {
                 self.predecessors(Endpoint::from_key(k), &mut buffer);
                 let mut meet = None;
                 for &n in &buffer {
-                    if s.backward.contains_key(&n) {
+                    if s.backward.contains(n) {
                         continue;
                     }
                     s.backward.insert(n, k);
-                    if s.forward.contains_key(&n) {
+                    if s.forward.contains(n) {
                         meet = Some(n);
                         break;
                     }

@@ -115,7 +115,11 @@ mod tests {
         let root = b.goal(None, "walk");
         b.start(root);
         let leg = b.command(root, "legMove", &[]);
-        let body = b.command(root, "bodyMove", &[NewConstraint::sequential_achievement_after(leg)]);
+        let body = b.command(
+            root,
+            "bodyMove",
+            &[NewConstraint::sequential_achievement_after(leg)],
+        );
         let err = b.tree.start(body, b.now).expect_err("not ready");
         assert_eq!(
             err.to_string(),
@@ -124,7 +128,10 @@ mod tests {
         );
         let child = b.goal(None, "other");
         let grandchild = b.goal(Some(child), "inner");
-        let err = b.tree.start(grandchild, b.now).expect_err("parent not started");
+        let err = b
+            .tree
+            .start(grandchild, b.now)
+            .expect_err("parent not started");
         assert!(
             matches!(&err, TreeError::NotReady { reason, .. } if reason.contains("parent n4")),
             "{err}"
@@ -157,10 +164,16 @@ mod tests {
         let root = b.goal(None, "walk");
         b.start(root);
         let cmd = b.command(root, "move", &[]);
-        assert_eq!(b.tree.get(root).map(|v| v.state()), Some(NodeState::Handling));
+        assert_eq!(
+            b.tree.get(root).map(|v| v.state()),
+            Some(NodeState::Handling)
+        );
         b.start(cmd);
         b.succeed(root);
-        assert_eq!(b.tree.get(root).map(|v| v.state()), Some(NodeState::Achieving));
+        assert_eq!(
+            b.tree.get(root).map(|v| v.state()),
+            Some(NodeState::Achieving)
+        );
         let events = b.succeed(cmd);
         assert_eq!(
             events,
@@ -216,7 +229,9 @@ mod tests {
         assert!(matches!(err, TreeError::WrongState { .. }), "{err}");
         b.now = 20;
         let events = b.run(a);
-        let ended = events.iter().position(|e| *e == TreeEvent::HandlingEnded(c));
+        let ended = events
+            .iter()
+            .position(|e| *e == TreeEvent::HandlingEnded(c));
         let achieved = events.iter().position(|e| *e == TreeEvent::Achieved(a));
         assert!(ended.is_some() && achieved < ended, "{events:?}");
         assert!(events.contains(&TreeEvent::Achieved(c)), "{events:?}");
@@ -230,7 +245,10 @@ mod tests {
         let a = b.command(root, "a", &[]);
         let c = b.command(root, "c", &[]);
         b.tree
-            .add_constraint(Constraint::new(a.achievement_end(), c.achievement_end()), 10)
+            .add_constraint(
+                Constraint::new(a.achievement_end(), c.achievement_end()),
+                10,
+            )
             .expect("accepted");
         b.now = 10;
         b.run(c);
@@ -254,7 +272,10 @@ mod tests {
         b.start(q);
         b.succeed(root);
         // Its handler has finished: its achievement has started, and waits for the query.
-        assert_eq!(b.tree.get(root).map(|v| v.state()), Some(NodeState::Achieving));
+        assert_eq!(
+            b.tree.get(root).map(|v| v.state()),
+            Some(NodeState::Achieving)
+        );
         let events = b.fail(q, "timed out");
         assert!(events.contains(&TreeEvent::Achieved(root)), "{events:?}");
     }
@@ -263,9 +284,19 @@ mod tests {
     fn finishing_a_node_that_is_not_running_is_refused() {
         let mut b = Bench::new();
         let root = b.goal(None, "walk");
-        let err = b.tree.finish(root, Outcome::Success, 5).expect_err("waiting");
+        let err = b
+            .tree
+            .finish(root, Outcome::Success, 5)
+            .expect_err("waiting");
         assert!(
-            matches!(err, TreeError::WrongState { op: "finish", state: NodeState::Waiting, .. }),
+            matches!(
+                err,
+                TreeError::WrongState {
+                    op: "finish",
+                    state: NodeState::Waiting,
+                    ..
+                }
+            ),
             "{err}"
         );
         let err = b.tree.start(root, 0).expect_err("time");

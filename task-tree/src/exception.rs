@@ -116,7 +116,7 @@ impl TaskTree {
         self.kill_children(id, now);
         if let Some(n) = self.nodes.get_mut(&id) {
             n.state = NodeState::Waiting;
-            n.times = [None; 4];
+            n.times = [crate::node::NOT_YET; 4];
             n.ended_at = None;
             n.handler_done = false;
             n.finish_pending = false;
@@ -169,7 +169,7 @@ impl TaskTree {
         node.finish_pending = false;
         node.handler_done = false;
         node.announced = false;
-        node.failure_reason = Some(reason.clone());
+        node.failure_reason = Some(reason.clone().into_boxed_str());
         let kind = node.kind;
         self.events.push(TreeEvent::Failed { node: id, reason });
         if kind == NodeKind::Query {
@@ -193,10 +193,7 @@ impl TaskTree {
     /// below them; the root's tree is then retired.
     pub(crate) fn finalize_failure(&mut self, id: NodeId, now: Nanos) {
         let (origin_name, origin_reason) = match self.nodes.get(&id) {
-            Some(n) => (
-                n.name.clone(),
-                n.failure_reason.clone().unwrap_or_default(),
-            ),
+            Some(n) => (n.name.clone(), n.failure_reason.clone().unwrap_or_default()),
             None => return,
         };
         let mut cur = id;
@@ -221,7 +218,7 @@ impl TaskTree {
             pn.handler_done = false;
             pn.announced = false;
             pn.failure_held = false;
-            pn.failure_reason = Some(reason.clone());
+            pn.failure_reason = Some(reason.clone().into_boxed_str());
             self.events.push(TreeEvent::Failed { node: p, reason });
             if running {
                 self.events.push(TreeEvent::CancelHandler(p));
@@ -284,7 +281,11 @@ mod tests {
         let other = b.goal(Some(root), "other");
         b.start(step);
         let leg = b.command(step, "legMove", &[]);
-        let body = b.command(step, "bodyMove", &[NewConstraint::sequential_achievement_after(leg)]);
+        let body = b.command(
+            step,
+            "bodyMove",
+            &[NewConstraint::sequential_achievement_after(leg)],
+        );
         b.succeed(step);
         b.start(leg);
         let events = b.fail(leg, "foot slipped");
@@ -322,7 +323,11 @@ mod tests {
         let root = b.goal(None, "walk");
         b.start(root);
         let leg = b.command(root, "legMove", &[]);
-        let body = b.command(root, "bodyMove", &[NewConstraint::sequential_achievement_after(leg)]);
+        let body = b.command(
+            root,
+            "bodyMove",
+            &[NewConstraint::sequential_achievement_after(leg)],
+        );
         b.succeed(root);
         b.start(leg);
         b.tree.suspend(leg, b.now).expect("suspend");
@@ -378,7 +383,11 @@ mod tests {
         let step = b.goal(Some(walk), "step");
         b.start(step);
         let leg_goal = b.goal(Some(step), "legMoveGoal");
-        let body = b.command(step, "bodyMove", &[NewConstraint::sequential_achievement_after(leg_goal)]);
+        let body = b.command(
+            step,
+            "bodyMove",
+            &[NewConstraint::sequential_achievement_after(leg_goal)],
+        );
         b.succeed(step);
         b.start(leg_goal);
         let leg = b.command(leg_goal, "legMove", &[]);
@@ -404,7 +413,9 @@ mod tests {
                 b.now,
             )
             .expect("patch");
-        b.tree.resume(leg, b.now).expect_err("the killed node was retired");
+        b.tree
+            .resume(leg, b.now)
+            .expect_err("the killed node was retired");
         assert!(b.tree.is_ready(recover));
         assert!(!b.tree.is_ready(body));
         b.run(recover);
@@ -422,8 +433,16 @@ mod tests {
         let step = b.goal(Some(root), "step");
         b.start(step);
         let leg = b.command(step, "legMove", &[]);
-        let waiting = b.command(step, "bodyMove", &[NewConstraint::sequential_achievement_after(leg)]);
-        let later = b.command(root, "later", &[NewConstraint::sequential_achievement_after(step)]);
+        let waiting = b.command(
+            step,
+            "bodyMove",
+            &[NewConstraint::sequential_achievement_after(leg)],
+        );
+        let later = b.command(
+            root,
+            "later",
+            &[NewConstraint::sequential_achievement_after(step)],
+        );
         b.succeed(root);
         b.start(leg);
         let events = b.tree.kill(step, b.now).expect("kill");
@@ -461,7 +480,10 @@ mod tests {
         b.tree.suspend(root, b.now).expect("suspend twice");
         assert!(!b.tree.is_ready(a));
         let events = b.succeed(root);
-        assert!(events.iter().all(|e| !matches!(e, TreeEvent::Ready(_))), "{events:?}");
+        assert!(
+            events.iter().all(|e| !matches!(e, TreeEvent::Ready(_))),
+            "{events:?}"
+        );
         assert!(b.tree.resume(root, b.now).expect("resume").is_empty());
         let events = b.tree.resume(root, b.now).expect("resume");
         assert_eq!(events, vec![TreeEvent::Ready(a)]);
@@ -498,7 +520,10 @@ mod tests {
         assert_eq!(view.state(), NodeState::Waiting);
         assert_eq!(view.children().count(), 0);
         let err = b.tree.retry(step, b.now).expect_err("waiting");
-        assert!(matches!(err, TreeError::WrongState { op: "retry", .. }), "{err}");
+        assert!(
+            matches!(err, TreeError::WrongState { op: "retry", .. }),
+            "{err}"
+        );
     }
 
     #[test]

@@ -29,6 +29,7 @@
 //! - `render`: the tree as indented text.
 //! - `view`: [`NodeView`], a read-only window on a node.
 //! - `op`: [`TreeOp`], mutations as data, and replay.
+//! - `store`: node storage in fixed-size pages indexed by id, freed as nodes retire.
 //! - `node`, `hash`: the internal node record and the id hasher.
 //!
 //! # Nodes and states
@@ -188,6 +189,7 @@ mod render;
 mod retire;
 mod spec;
 mod state;
+mod store;
 #[cfg(test)]
 mod testing;
 mod tree;

@@ -5,6 +5,9 @@ use crate::id::NodeId;
 use crate::point::{Endpoint, Point};
 use crate::state::{NodeKind, NodeState};
 
+/// The time stored for a point that has not occurred.
+pub(crate) const NOT_YET: Nanos = Nanos::MAX;
+
 /// One end of a pending constraint, stored on a node.
 ///
 /// In a node's `waits_on` list, `own` is the node's point that waits and `other` the point
@@ -20,19 +23,19 @@ pub(crate) struct Edge {
 #[derive(Debug, Clone)]
 pub(crate) struct Node {
     pub(crate) kind: NodeKind,
-    pub(crate) name: String,
-    pub(crate) handler: String,
+    pub(crate) name: Box<str>,
+    pub(crate) handler: Box<str>,
     pub(crate) parent: Option<NodeId>,
     /// Children in creation order (ascending ids). May still hold ids of retired
     /// children; they are compacted away once they are the majority.
     pub(crate) children: Vec<NodeId>,
     /// How many ids in `children` are retired.
-    pub(crate) retired_children: usize,
+    pub(crate) retired_children: u32,
     /// Children that are not finished yet (achieved, killed, or failed for good).
-    pub(crate) unfinished_children: usize,
+    pub(crate) unfinished_children: u32,
     pub(crate) state: NodeState,
-    /// When each point occurred, indexed by [`Point::index`].
-    pub(crate) times: [Option<Nanos>; 4],
+    /// When each point occurred, indexed by [`Point::index`]; [`NOT_YET`] if it has not.
+    pub(crate) times: [Nanos; 4],
     pub(crate) created_at: Nanos,
     /// When the node reached a terminal state (achieved, failed or killed).
     pub(crate) ended_at: Option<Nanos>,
@@ -50,7 +53,7 @@ pub(crate) struct Node {
     pub(crate) finish_pending: bool,
     /// The node failed while suspended: the failure waits for the exception handling.
     pub(crate) failure_held: bool,
-    pub(crate) failure_reason: Option<String>,
+    pub(crate) failure_reason: Option<Box<str>>,
     /// Plan-first is set on this node.
     pub(crate) plan_first: bool,
     /// A `Ready` event was emitted and is still valid.
@@ -67,14 +70,14 @@ impl Node {
     ) -> Self {
         Node {
             kind,
-            name,
-            handler,
+            name: name.into_boxed_str(),
+            handler: handler.into_boxed_str(),
             parent,
             children: Vec::new(),
             retired_children: 0,
             unfinished_children: 0,
             state: NodeState::Waiting,
-            times: [None; 4],
+            times: [NOT_YET; 4],
             created_at: now,
             ended_at: None,
             blockers: [0; 4],
@@ -91,11 +94,17 @@ impl Node {
     }
 
     pub(crate) fn time(&self, point: Point) -> Option<Nanos> {
-        self.times[point.index()]
+        let t = self.times[point.index()];
+        (t != NOT_YET).then_some(t)
     }
 
     pub(crate) fn occurred(&self, point: Point) -> bool {
-        self.times[point.index()].is_some()
+        self.times[point.index()] != NOT_YET
+    }
+
+    /// True if the node has children that are not retired.
+    pub(crate) fn has_live_children(&self) -> bool {
+        self.children.len() > self.retired_children as usize
     }
 
     /// Achieved, killed, or failed with the failure no longer held: nothing more will

@@ -127,7 +127,9 @@ impl TaskTree {
 
     /// Builds a tree by applying `ops` in order to a fresh one, stopping at the first op
     /// that fails. Returns the tree and every event, in order.
-    pub fn replay<'a>(ops: impl IntoIterator<Item = &'a TreeOp>) -> Result<(TaskTree, Vec<TreeEvent>)> {
+    pub fn replay<'a>(
+        ops: impl IntoIterator<Item = &'a TreeOp>,
+    ) -> Result<(TaskTree, Vec<TreeEvent>)> {
         let mut tree = TaskTree::new();
         let mut events = Vec::new();
         for op in ops {

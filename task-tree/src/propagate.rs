@@ -158,7 +158,7 @@ impl TaskTree {
         let Some(node) = self.nodes.get_mut(&id) else {
             return;
         };
-        node.times[point.index()] = Some(now);
+        node.times[point.index()] = now;
         self.events.push(match point {
             Point::HandlingStart => TreeEvent::HandlingStarted(id),
             Point::HandlingEnd => TreeEvent::HandlingEnded(id),
@@ -177,7 +177,8 @@ impl TaskTree {
         if node.gates.is_empty() {
             return;
         }
-        let mut released = Vec::new();
+        let mut released = std::mem::take(&mut self.scratch_edges);
+        released.clear();
         node.gates.retain(|e| {
             if point.is_none_or(|p| e.own == p) {
                 released.push(*e);
@@ -186,9 +187,10 @@ impl TaskTree {
                 true
             }
         });
-        for e in released {
+        for e in released.drain(..) {
             self.drop_wait(e.other, Endpoint::new(id, e.own), true);
         }
+        self.scratch_edges = released;
     }
 
     /// Removes the pending constraint `source <= target` from `target`'s node; when that

@@ -79,8 +79,8 @@ impl TaskTree {
 
 #[cfg(test)]
 mod tests {
-    use crate::testing::Bench;
     use crate::NewConstraint;
+    use crate::testing::Bench;
 
     #[test]
     fn renders_one_indented_line_per_node_with_state_and_constraints() {
@@ -89,7 +89,11 @@ mod tests {
         b.start(walk);
         let step = b.goal(Some(walk), "planGait");
         let leg = b.command(step, "legMove", &[]);
-        b.command(step, "bodyMove", &[NewConstraint::sequential_achievement_after(leg)]);
+        b.command(
+            step,
+            "bodyMove",
+            &[NewConstraint::sequential_achievement_after(leg)],
+        );
         b.tree.suspend(step, b.now).expect("suspend");
         assert_eq!(
             b.tree.render_text(),

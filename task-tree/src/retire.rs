@@ -4,7 +4,7 @@ use std::mem::size_of;
 
 use crate::event::TreeEvent;
 use crate::id::NodeId;
-use crate::node::{Edge, Node};
+use crate::node::Edge;
 use crate::point::Endpoint;
 use crate::tree::TaskTree;
 
@@ -15,21 +15,16 @@ impl TaskTree {
     /// Removes a finished node and whatever is left below it, and reports `Retired`.
     /// Constraints naming retired nodes count as satisfied from now on.
     pub(crate) fn retire(&mut self, id: NodeId) {
-        let parent = self.nodes.get(&id).and_then(|n| n.parent);
-        for r in self.subtree_ids(id) {
-            let Some(node) = self.nodes.remove(&r) else {
-                continue;
-            };
-            if node.suspend_count > 0 {
-                self.suspended_nodes = self.suspended_nodes.saturating_sub(1);
+        let Some(node) = self.nodes.get(&id) else {
+            return;
+        };
+        let parent = node.parent;
+        if node.has_live_children() {
+            for r in self.subtree_ids(id) {
+                self.remove_node(r);
             }
-            // A finished node has no pending constraints left; stay safe if one slipped by.
-            for e in node.gates {
-                self.drop_wait(e.other, Endpoint::new(r, e.own), true);
-            }
-            for e in node.waits_on {
-                self.drop_gate(e.other, Endpoint::new(r, e.own));
-            }
+        } else {
+            self.remove_node(id);
         }
         match parent {
             Some(p) => self.note_retired_child(p),
@@ -40,6 +35,22 @@ impl TaskTree {
         self.events.push(TreeEvent::Retired(id));
     }
 
+    fn remove_node(&mut self, id: NodeId) {
+        let Some(node) = self.nodes.remove(&id) else {
+            return;
+        };
+        if node.suspend_count > 0 {
+            self.suspended_nodes = self.suspended_nodes.saturating_sub(1);
+        }
+        // A finished node has no pending constraints left; stay safe if one slipped by.
+        for e in node.gates {
+            self.drop_wait(e.other, Endpoint::new(id, e.own), true);
+        }
+        for e in node.waits_on {
+            self.drop_gate(e.other, Endpoint::new(id, e.own));
+        }
+    }
+
     /// Counts a retired child and compacts the child list once retired ids dominate it,
     /// so a long-lived parent's list stays proportional to its live children.
     fn note_retired_child(&mut self, parent: NodeId) {
@@ -47,7 +58,8 @@ impl TaskTree {
             return;
         };
         pn.retired_children += 1;
-        if pn.children.len() < COMPACT_MIN || pn.retired_children * 2 <= pn.children.len() {
+        if pn.children.len() < COMPACT_MIN || pn.retired_children as usize * 2 <= pn.children.len()
+        {
             return;
         }
         let mut children = std::mem::take(&mut pn.children);
@@ -65,17 +77,16 @@ impl TaskTree {
     /// current capacity, each node's strings and lists, the root set and the scratch space
     /// of the cycle search. Allocator overhead is not counted.
     pub fn estimated_bytes(&self) -> usize {
-        let entry = size_of::<(NodeId, Node)>() + 1;
-        let table = self.nodes.capacity() * entry;
+        let table = self.nodes.table_bytes();
         let per_node: usize = self
             .nodes
             .values()
             .map(|n| {
-                n.name.capacity()
-                    + n.handler.capacity()
+                n.name.len()
+                    + n.handler.len()
                     + n.children.capacity() * size_of::<NodeId>()
                     + (n.waits_on.capacity() + n.gates.capacity()) * size_of::<Edge>()
-                    + n.failure_reason.as_ref().map_or(0, String::capacity)
+                    + n.failure_reason.as_ref().map_or(0, |r| r.len())
             })
             .sum();
         // A B-tree set costs roughly its element plus a share of node overhead.
@@ -101,7 +112,11 @@ mod tests {
         }
         let node = b.tree.nodes.get(&root).expect("live");
         assert!(node.children.len() < 16, "{}", node.children.len());
-        assert!(node.children.capacity() < 64, "{}", node.children.capacity());
+        assert!(
+            node.children.capacity() < 64,
+            "{}",
+            node.children.capacity()
+        );
         assert_eq!(b.tree.len(), 1);
         assert!(b.tree.estimated_bytes() > 0);
     }

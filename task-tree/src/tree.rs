@@ -5,17 +5,17 @@ use std::collections::{BTreeSet, VecDeque};
 use crate::cycle::SearchScratch;
 use crate::error::{Result, TreeError};
 use crate::event::TreeEvent;
-use crate::hash::IdMap;
 use crate::id::{Nanos, NodeId};
-use crate::node::Node;
+use crate::node::{Edge, Node};
 use crate::propagate::Work;
+use crate::store::NodeStore;
 use crate::view::NodeView;
 
 /// A forest of task trees with their temporal constraints. Pure bookkeeping: no I/O, no
 /// clock, no threads; every call returns the events it caused.
 #[derive(Debug, Clone)]
 pub struct TaskTree {
-    pub(crate) nodes: IdMap<NodeId, Node>,
+    pub(crate) nodes: NodeStore,
     pub(crate) roots: BTreeSet<NodeId>,
     /// The number the next node will get.
     pub(crate) next_id: u64,
@@ -26,6 +26,8 @@ pub struct TaskTree {
     pub(crate) events: Vec<TreeEvent>,
     pub(crate) work: VecDeque<Work>,
     pub(crate) search: SearchScratch,
+    /// Reused by constraint release.
+    pub(crate) scratch_edges: Vec<Edge>,
 }
 
 impl Default for TaskTree {
@@ -38,7 +40,8 @@ impl TaskTree {
     /// An empty tree; the first node will be `n1`.
     pub fn new() -> Self {
         TaskTree {
-            nodes: IdMap::default(),
+            nodes: NodeStore::default(),
+            scratch_edges: Vec::new(),
             roots: BTreeSet::new(),
             next_id: 1,
             last_now: 0,
@@ -82,7 +85,9 @@ impl TaskTree {
 
     /// A read-only view of a live node, or `None` if the id is unknown or retired.
     pub fn get(&self, id: NodeId) -> Option<NodeView<'_>> {
-        self.nodes.get(&id).map(|node| NodeView::new(self, id, node))
+        self.nodes
+            .get(&id)
+            .map(|node| NodeView::new(self, id, node))
     }
 
     /// True if the node is live.

@@ -94,7 +94,9 @@ impl Reference {
                     out.push(n.achievement_end());
                     out.extend(kids.iter().map(|c| c.achievement_start()));
                 }
-                Point::AchievementEnd => out.extend(self.parent.get(&n).map(|p| p.achievement_end())),
+                Point::AchievementEnd => {
+                    out.extend(self.parent.get(&n).map(|p| p.achievement_end()))
+                }
             }
             for (b, a) in &self.edges {
                 if *b == Endpoint::new(n, p) {
@@ -550,7 +552,17 @@ fn exception(run: &mut Run, node: NodeId) {
         _ => {
             run.apply(TreeOp::Resume { node, now })
                 .expect("the failed node is still suspended");
-            assert!(!run.tree.contains(node), "an unhandled failure propagates");
+            let still_suspended = std::iter::once(node)
+                .chain(run.tree.ancestors(node))
+                .any(|a| run.tree.get(a).is_some_and(|v| v.is_suspended()));
+            if still_suspended {
+                assert!(
+                    run.tree.get(node).is_some_and(|v| v.failure_held()),
+                    "the failure stays held while it or an ancestor is suspended"
+                );
+            } else {
+                assert!(!run.tree.contains(node), "an unhandled failure propagates");
+            }
         }
     }
 }
@@ -582,13 +594,34 @@ fn check(run: &Run) {
             check_order(run, b, a, 0, "node ordering");
         }
         if let Some(&p) = run.parent.get(&n) {
-            check_order(run, p.handling_start(), n.handling_start(), 0, "parent start");
-            check_order(run, p.achievement_start(), n.achievement_start(), 0, "parent achievement start");
-            check_order(run, n.achievement_end(), p.achievement_end(), 0, "child achievement end");
+            check_order(
+                run,
+                p.handling_start(),
+                n.handling_start(),
+                0,
+                "parent start",
+            );
+            check_order(
+                run,
+                p.achievement_start(),
+                n.achievement_start(),
+                0,
+                "parent achievement start",
+            );
+            check_order(
+                run,
+                n.achievement_end(),
+                p.achievement_end(),
+                0,
+                "child achievement end",
+            );
         }
         if run.occurred.contains_key(&n.achievement_end()) {
             for point in Point::ALL {
-                assert!(run.occurred.contains_key(&n.at(point)), "{n} achieved without {point:?}");
+                assert!(
+                    run.occurred.contains_key(&n.at(point)),
+                    "{n} achieved without {point:?}"
+                );
             }
         }
     }
@@ -599,13 +632,20 @@ fn check(run: &Run) {
     let mut events = Vec::new();
     for (op, render) in ops.iter().zip(&run.renders) {
         events.extend(tree.apply(op).expect("replayed op applies"));
-        assert_eq!(&tree.render_text(), render, "tree differs after replaying {op:?}");
+        assert_eq!(
+            &tree.render_text(),
+            render,
+            "tree differs after replaying {op:?}"
+        );
     }
     assert_eq!(events, run.events);
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 400, ..ProptestConfig::default() })]
+    // 400 cases by default; PROPTEST_CASES=N runs a longer sweep.
+    #![proptest_config(ProptestConfig::with_cases(
+        std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(400)
+    ))]
 
     #[test]
     fn random_plans_respect_constraints_complete_and_replay(p in params()) {
@@ -628,6 +668,10 @@ fn a_large_random_plan_without_faults_completes() {
         };
         let run = simulate(&p);
         check(&run);
-        assert!(run.accepted.len() > 50, "seed {seed}: only {} accepted", run.accepted.len());
+        assert!(
+            run.accepted.len() > 50,
+            "seed {seed}: only {} accepted",
+            run.accepted.len()
+        );
     }
 }

@@ -62,7 +62,10 @@ fn concurrent_walking_plans_the_next_step_while_the_current_one_executes() {
             (27, BodyMove(3)),
         ]
     );
-    assert_eq!(end, 31, "concurrent mode saves the planning time of steps 2 and 3");
+    assert_eq!(
+        end, 31,
+        "concurrent mode saves the planning time of steps 2 and 3"
+    );
 }
 
 #[test]
@@ -94,8 +97,14 @@ fn replaying_the_walk_reproduces_ids_events_and_trees() {
     let upto: Vec<TreeOp> = ops.iter().filter(|op| op.now() <= 13).cloned().collect();
     let (tree, _) = TaskTree::replay(&upto).expect("replay prefix");
     let text = tree.render_text();
-    assert!(text.contains("planGait -> gait-planner: handling"), "{text}");
-    assert!(text.contains("command legMove -> controller: handling"), "{text}");
+    assert!(
+        text.contains("planGait -> gait-planner: handling"),
+        "{text}"
+    );
+    assert!(
+        text.contains("command legMove -> controller: handling"),
+        "{text}"
+    );
     assert!(!events.is_empty() && events.iter().any(|e| matches!(e, TreeEvent::Retired(_))));
 }
 
@@ -107,7 +116,11 @@ fn memory_stays_bounded_over_ten_thousand_steps() {
     long.run();
     assert!(short.tree.is_empty() && long.tree.is_empty());
     assert_eq!(long.nodes_added, 1 + 4 * 10_000);
-    assert!(long.peak_live <= 16, "live nodes peaked at {}", long.peak_live);
+    assert!(
+        long.peak_live <= 16,
+        "live nodes peaked at {}",
+        long.peak_live
+    );
     assert_eq!(long.peak_live, short.peak_live);
     assert!(
         long.peak_bytes <= short.peak_bytes + short.peak_bytes / 10,

@@ -18,9 +18,7 @@
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, VecDeque};
 
-use tca_task_tree::{
-    Nanos, NewConstraint, NodeId, NodeSpec, Outcome, TaskTree, TreeEvent, TreeOp,
-};
+use tca_task_tree::{Nanos, NewConstraint, NodeId, NodeSpec, Outcome, TaskTree, TreeEvent, TreeOp};
 
 /// How steps overlap.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -171,7 +169,10 @@ impl WalkSim {
         spec.parent = parent;
         spec.constraints = with;
         let op_spec = self.record.then(|| spec.clone());
-        let (id, events) = self.tree.add_node(spec, self.now).expect("walking plan is valid");
+        let (id, events) = self
+            .tree
+            .add_node(spec, self.now)
+            .expect("walking plan is valid");
         if let Some(spec) = op_spec {
             self.ops.push(TreeOp::AddNode {
                 id,
