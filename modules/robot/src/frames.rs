@@ -22,7 +22,11 @@ pub struct CarriagePose {
 impl CarriagePose {
     /// A level carriage at `y_m`.
     pub fn level(y_m: f64) -> Self {
-        Self { y_m, roll_rad: 0.0, pitch_rad: 0.0 }
+        Self {
+            y_m,
+            roll_rad: 0.0,
+            pitch_rad: 0.0,
+        }
     }
 
     /// World origin of the carriage frame (the shoulder column at the links' height).
@@ -45,7 +49,8 @@ impl CarriagePose {
 
     /// Maps a world point to the carriage frame.
     pub fn to_carriage(&self, carriage: &CarriageParams, p_world: &Point3<f64>) -> Point3<f64> {
-        self.world_from_carriage(carriage).inverse_transform_point(p_world)
+        self.world_from_carriage(carriage)
+            .inverse_transform_point(p_world)
     }
 
     /// Maps a carriage-frame vector (a direction or a force) to the world frame.
@@ -59,7 +64,10 @@ impl ScannerMount {
     /// `Trans(position) Rz(pi/2 + yaw) Ry(pitch_down) Rx(roll)`. The scanner frame has +X
     /// along the boresight, +Y to the left, +Z up.
     pub fn carriage_from_scanner(&self) -> Isometry3<f64> {
-        let rz = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), std::f64::consts::FRAC_PI_2 + self.yaw_rad);
+        let rz = UnitQuaternion::from_axis_angle(
+            &Vector3::z_axis(),
+            std::f64::consts::FRAC_PI_2 + self.yaw_rad,
+        );
         let ry = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), self.pitch_down_rad);
         let rx = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), self.roll_rad);
         let [x, y, z] = self.position_m;
@@ -67,7 +75,11 @@ impl ScannerMount {
     }
 
     /// The transform taking scanner-frame coordinates to world coordinates for a carriage pose.
-    pub fn world_from_scanner(&self, carriage: &CarriageParams, pose: &CarriagePose) -> Isometry3<f64> {
+    pub fn world_from_scanner(
+        &self,
+        carriage: &CarriageParams,
+        pose: &CarriagePose,
+    ) -> Isometry3<f64> {
         pose.world_from_carriage(carriage) * self.carriage_from_scanner()
     }
 }
@@ -90,13 +102,18 @@ mod tests {
     #[test]
     fn scanner_looks_forward_and_down() {
         let p = LegParams::default();
-        let t = p.scanner.world_from_scanner(&p.carriage, &CarriagePose::level(1.0));
+        let t = p
+            .scanner
+            .world_from_scanner(&p.carriage, &CarriagePose::level(1.0));
         let boresight = t * Vector3::x();
         assert!(boresight.y > 0.5, "looks forward: {boresight}");
         assert!(boresight.z < -0.3, "looks down: {boresight}");
         assert!(boresight.x.abs() < 1e-9);
         let left = t * Vector3::y();
-        assert!(left.x < -0.99, "scanner +Y is world -X (left when facing +Y): {left}");
+        assert!(
+            left.x < -0.99,
+            "scanner +Y is world -X (left when facing +Y): {left}"
+        );
         let origin = t * Point3::origin();
         assert!((origin - Point3::new(3.0, 1.5, 4.5)).norm() < 1e-12);
     }

@@ -79,11 +79,25 @@ impl<T> Grid<T> {
         if !(origin.x.is_finite() && origin.y.is_finite()) {
             return Err(GridError::BadOrigin(origin.x, origin.y));
         }
-        let expected = nx.checked_mul(ny).filter(|&n| n > 0).ok_or(GridError::BadSize { nx, ny })?;
+        let expected = nx
+            .checked_mul(ny)
+            .filter(|&n| n > 0)
+            .ok_or(GridError::BadSize { nx, ny })?;
         if cells.len() != expected {
-            return Err(GridError::LengthMismatch { nx, ny, expected, got: cells.len() });
+            return Err(GridError::LengthMismatch {
+                nx,
+                ny,
+                expected,
+                got: cells.len(),
+            });
         }
-        Ok(Self { origin, resolution_m, nx, ny, cells })
+        Ok(Self {
+            origin,
+            resolution_m,
+            nx,
+            ny,
+            cells,
+        })
     }
 
     /// A grid whose cells are computed from their index and centre.
@@ -176,7 +190,10 @@ impl<T> Grid<T> {
 
     /// The cell at a row-major index.
     pub fn cell_of_index(&self, index: usize) -> Option<CellIndex> {
-        (index < self.cells.len()).then(|| CellIndex { ix: index % self.nx, iy: index / self.nx })
+        (index < self.cells.len()).then(|| CellIndex {
+            ix: index % self.nx,
+            iy: index / self.nx,
+        })
     }
 
     /// The value of a cell, if it is in the grid.
@@ -199,7 +216,10 @@ impl<T> Grid<T> {
 
     /// Continuous cell coordinates of a world point: cell centres are at whole numbers.
     pub fn world_to_grid(&self, p: Point2<f64>) -> (f64, f64) {
-        ((p.x - self.origin.x) / self.resolution_m, (p.y - self.origin.y) / self.resolution_m)
+        (
+            (p.x - self.origin.x) / self.resolution_m,
+            (p.y - self.origin.y) / self.resolution_m,
+        )
     }
 
     /// The cell containing a world point, if inside the grid.
@@ -207,7 +227,10 @@ impl<T> Grid<T> {
         let (gx, gy) = self.world_to_grid(p);
         let (fx, fy) = ((gx + 0.5).floor(), (gy + 0.5).floor());
         if fx >= 0.0 && fy >= 0.0 && fx < self.nx as f64 && fy < self.ny as f64 {
-            Some(CellIndex { ix: fx as usize, iy: fy as usize })
+            Some(CellIndex {
+                ix: fx as usize,
+                iy: fy as usize,
+            })
         } else {
             None
         }
@@ -218,9 +241,16 @@ impl<T> Grid<T> {
         let (gx, gy) = self.world_to_grid(p);
         let clamp = |g: f64, n: usize| {
             let r = (g + 0.5).floor();
-            if r.is_nan() || r < 0.0 { 0 } else { (r as usize).min(n - 1) }
+            if r.is_nan() || r < 0.0 {
+                0
+            } else {
+                (r as usize).min(n - 1)
+            }
         };
-        CellIndex { ix: clamp(gx, self.nx), iy: clamp(gy, self.ny) }
+        CellIndex {
+            ix: clamp(gx, self.nx),
+            iy: clamp(gy, self.ny),
+        }
     }
 
     /// World rectangle covered by the cells: (min corner, max corner).
@@ -241,7 +271,10 @@ impl<T> Grid<T> {
         &self,
         min: Point2<f64>,
         max: Point2<f64>,
-    ) -> Option<(std::ops::RangeInclusive<usize>, std::ops::RangeInclusive<usize>)> {
+    ) -> Option<(
+        std::ops::RangeInclusive<usize>,
+        std::ops::RangeInclusive<usize>,
+    )> {
         let (gx0, gy0) = self.world_to_grid(min);
         let (gx1, gy1) = self.world_to_grid(max);
         let lo = |g: f64| g.ceil().max(0.0);
@@ -256,13 +289,29 @@ impl<T> Grid<T> {
     /// Every cell with its index, row by row.
     pub fn iter(&self) -> impl Iterator<Item = (CellIndex, &T)> + '_ {
         let nx = self.nx;
-        self.cells.iter().enumerate().map(move |(i, v)| (CellIndex { ix: i % nx, iy: i / nx }, v))
+        self.cells.iter().enumerate().map(move |(i, v)| {
+            (
+                CellIndex {
+                    ix: i % nx,
+                    iy: i / nx,
+                },
+                v,
+            )
+        })
     }
 
     /// Every cell with its index, mutable, row by row.
     pub fn iter_mut(&mut self) -> impl Iterator<Item = (CellIndex, &mut T)> + '_ {
         let nx = self.nx;
-        self.cells.iter_mut().enumerate().map(move |(i, v)| (CellIndex { ix: i % nx, iy: i / nx }, v))
+        self.cells.iter_mut().enumerate().map(move |(i, v)| {
+            (
+                CellIndex {
+                    ix: i % nx,
+                    iy: i / nx,
+                },
+                v,
+            )
+        })
     }
 
     /// A grid of the same layout with every cell mapped.
@@ -289,14 +338,28 @@ mod tests {
         assert_eq!(g.cell_center(CellIndex::new(3, 2)), Point2::new(2.5, 3.0));
         assert_eq!(g.cell_at(Point2::new(2.6, 3.1)), Some(CellIndex::new(3, 2)));
         assert_eq!(g.cell_at(Point2::new(0.74, 2.0)), None);
-        assert_eq!(g.cell_at(Point2::new(0.76, 2.0)), Some(CellIndex::new(0, 0)));
-        assert_eq!(g.nearest_cell(Point2::new(-9.0, 99.0)), CellIndex::new(0, 2));
+        assert_eq!(
+            g.cell_at(Point2::new(0.76, 2.0)),
+            Some(CellIndex::new(0, 0))
+        );
+        assert_eq!(
+            g.nearest_cell(Point2::new(-9.0, 99.0)),
+            CellIndex::new(0, 2)
+        );
         let (lo, hi) = g.bounds();
         assert_eq!((lo, hi), (Point2::new(0.75, 1.75), Point2::new(2.75, 3.25)));
-        let (xr, yr) = g.cell_range(Point2::new(1.2, 2.0), Point2::new(9.0, 2.6)).unwrap();
+        let (xr, yr) = g
+            .cell_range(Point2::new(1.2, 2.0), Point2::new(9.0, 2.6))
+            .unwrap();
         assert_eq!((xr, yr), (1..=3, 0..=1));
-        assert!(g.cell_range(Point2::new(5.0, 5.0), Point2::new(6.0, 6.0)).is_none());
-        assert_eq!(g.iter().nth(5).map(|(c, v)| (c, *v)), Some((CellIndex::new(1, 1), 11)));
+        assert!(
+            g.cell_range(Point2::new(5.0, 5.0), Point2::new(6.0, 6.0))
+                .is_none()
+        );
+        assert_eq!(
+            g.iter().nth(5).map(|(c, v)| (c, *v)),
+            Some((CellIndex::new(1, 1), 11))
+        );
         assert_eq!(g.index_of(CellIndex::new(1, 1)), Some(5));
         assert_eq!(g.cell_of_index(5), Some(CellIndex::new(1, 1)));
         assert_eq!(g.map(|v| v * 2).get(CellIndex::new(1, 1)), Some(&22));
@@ -304,11 +367,21 @@ mod tests {
 
     #[test]
     fn bad_layouts_are_refused() {
-        assert!(matches!(Grid::<u8>::filled(Point2::origin(), 0.0, 2, 2, 0), Err(GridError::BadResolution(_))));
-        assert!(matches!(Grid::<u8>::filled(Point2::origin(), 1.0, 0, 2, 0), Err(GridError::BadSize { .. })));
+        assert!(matches!(
+            Grid::<u8>::filled(Point2::origin(), 0.0, 2, 2, 0),
+            Err(GridError::BadResolution(_))
+        ));
+        assert!(matches!(
+            Grid::<u8>::filled(Point2::origin(), 1.0, 0, 2, 0),
+            Err(GridError::BadSize { .. })
+        ));
         assert!(matches!(
             Grid::from_vec(Point2::origin(), 1.0, 2, 2, vec![1, 2, 3]),
-            Err(GridError::LengthMismatch { expected: 4, got: 3, .. })
+            Err(GridError::LengthMismatch {
+                expected: 4,
+                got: 3,
+                ..
+            })
         ));
         assert!(matches!(
             Grid::<u8>::filled(Point2::new(f64::NAN, 0.0), 1.0, 2, 2, 0),

@@ -28,7 +28,11 @@ pub struct JointPosition {
 impl JointPosition {
     /// A joint position from its three coordinates.
     pub fn new(shoulder_rad: f64, elbow_rad: f64, vertical_m: f64) -> Self {
-        Self { shoulder_rad, elbow_rad, vertical_m }
+        Self {
+            shoulder_rad,
+            elbow_rad,
+            vertical_m,
+        }
     }
 
     /// The coordinates in the order shoulder, elbow, vertical.
@@ -102,7 +106,11 @@ pub enum ElbowBranch {
 impl ElbowBranch {
     /// The branch a joint position is on.
     pub fn of(q: &JointPosition) -> Self {
-        if q.elbow_rad >= 0.0 { ElbowBranch::Positive } else { ElbowBranch::Negative }
+        if q.elbow_rad >= 0.0 {
+            ElbowBranch::Positive
+        } else {
+            ElbowBranch::Negative
+        }
     }
 }
 
@@ -230,25 +238,42 @@ impl LegKinematics {
     /// Nearest and farthest horizontal distance of the foot from the shoulder axis, metres
     /// (the nearest is set by the elbow limits).
     pub fn reach_range_m(&self) -> (f64, f64) {
-        let max_fold = self.elbow.min.abs().max(self.elbow.max.abs()).min(std::f64::consts::PI);
-        (self.horizontal_reach_for_elbow(max_fold), self.upper_m + self.lower_m)
+        let max_fold = self
+            .elbow
+            .min
+            .abs()
+            .max(self.elbow.max.abs())
+            .min(std::f64::consts::PI);
+        (
+            self.horizontal_reach_for_elbow(max_fold),
+            self.upper_m + self.lower_m,
+        )
     }
 
     fn horizontal_reach_for_elbow(&self, elbow_rad: f64) -> f64 {
         let (l1, l2) = (self.upper_m, self.lower_m);
-        (l1 * l1 + l2 * l2 + 2.0 * l1 * l2 * elbow_rad.cos()).max(0.0).sqrt()
+        (l1 * l1 + l2 * l2 + 2.0 * l1 * l2 * elbow_rad.cos())
+            .max(0.0)
+            .sqrt()
     }
 
     /// Checks a joint position against the soft limits (and finiteness).
     pub fn check_limits(&self, q: &JointPosition) -> Result<()> {
         if !q.is_finite() {
-            return Err(KinematicsError::NotFinite { what: "joint position" });
+            return Err(KinematicsError::NotFinite {
+                what: "joint position",
+            });
         }
         for joint in Joint::ALL {
             let value = q.get(joint);
             let lim = self.limits(joint);
             if !lim.contains(value) {
-                return Err(KinematicsError::JointLimit { joint, value, min: lim.min, max: lim.max });
+                return Err(KinematicsError::JointLimit {
+                    joint,
+                    value,
+                    min: lim.min,
+                    max: lim.max,
+                });
             }
         }
         Ok(())
@@ -288,7 +313,9 @@ impl LegKinematics {
     /// elbow branch; refused when out of reach or outside the joint limits.
     pub fn inverse(&self, p: &Point3<f64>, branch: ElbowBranch) -> Result<JointPosition> {
         if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
-            return Err(KinematicsError::NotFinite { what: "foot position" });
+            return Err(KinematicsError::NotFinite {
+                what: "foot position",
+            });
         }
         let (l1, l2) = (self.upper_m, self.lower_m);
         let r2 = p.x * p.x + p.y * p.y;
@@ -296,19 +323,26 @@ impl LegKinematics {
         let (min_reach_m, max_reach_m) = self.reach_range_m();
         let cos_elbow = (r2 - l1 * l1 - l2 * l2) / (2.0 * l1 * l2);
         if !(-1.0..=1.0).contains(&cos_elbow) {
-            return Err(KinematicsError::OutOfReach { horizontal_m: r, min_reach_m, max_reach_m });
+            return Err(KinematicsError::OutOfReach {
+                horizontal_m: r,
+                min_reach_m,
+                max_reach_m,
+            });
         }
         let magnitude = cos_elbow.acos();
         let elbow_rad = match branch {
             ElbowBranch::Positive => magnitude,
             ElbowBranch::Negative => -magnitude,
         };
-        let shoulder_rad = wrap_angle(
-            p.y.atan2(p.x) - (l2 * elbow_rad.sin()).atan2(l1 + l2 * elbow_rad.cos()),
-        );
+        let shoulder_rad =
+            wrap_angle(p.y.atan2(p.x) - (l2 * elbow_rad.sin()).atan2(l1 + l2 * elbow_rad.cos()));
         let q = JointPosition::new(shoulder_rad, elbow_rad, -p.z);
         if !self.elbow.contains(elbow_rad) {
-            return Err(KinematicsError::OutOfReach { horizontal_m: r, min_reach_m, max_reach_m });
+            return Err(KinematicsError::OutOfReach {
+                horizontal_m: r,
+                min_reach_m,
+                max_reach_m,
+            });
         }
         self.check_limits(&q)?;
         Ok(q)
@@ -449,14 +483,31 @@ mod tests {
     #[test]
     fn out_of_reach_and_limits_are_refused() {
         let k = kin();
-        let err = k.inverse(&Point3::new(2.6, 0.0, -3.5), ElbowBranch::Positive).unwrap_err();
+        let err = k
+            .inverse(&Point3::new(2.6, 0.0, -3.5), ElbowBranch::Positive)
+            .unwrap_err();
         assert!(matches!(err, KinematicsError::OutOfReach { .. }), "{err}");
         assert!(err.to_string().contains("2.600"));
-        let err = k.inverse(&Point3::new(0.05, 0.0, -3.5), ElbowBranch::Positive).unwrap_err();
+        let err = k
+            .inverse(&Point3::new(0.05, 0.0, -3.5), ElbowBranch::Positive)
+            .unwrap_err();
         assert!(matches!(err, KinematicsError::OutOfReach { .. }), "{err}");
-        let err = k.inverse(&Point3::new(1.0, 1.0, -4.8), ElbowBranch::Positive).unwrap_err();
-        assert!(matches!(err, KinematicsError::JointLimit { joint: Joint::Vertical, .. }), "{err}");
-        let err = k.inverse(&Point3::new(f64::NAN, 1.0, -4.0), ElbowBranch::Positive).unwrap_err();
+        let err = k
+            .inverse(&Point3::new(1.0, 1.0, -4.8), ElbowBranch::Positive)
+            .unwrap_err();
+        assert!(
+            matches!(
+                err,
+                KinematicsError::JointLimit {
+                    joint: Joint::Vertical,
+                    ..
+                }
+            ),
+            "{err}"
+        );
+        let err = k
+            .inverse(&Point3::new(f64::NAN, 1.0, -4.0), ElbowBranch::Positive)
+            .unwrap_err();
         assert!(matches!(err, KinematicsError::NotFinite { .. }));
     }
 
@@ -501,15 +552,32 @@ mod tests {
     #[test]
     fn limit_switches_sit_outside_the_soft_limits() {
         let k = kin();
-        assert_eq!(k.limit_switch_tripped(&JointPosition::new(0.0, 0.5, 3.5)), None);
-        assert_eq!(k.limit_switch_tripped(&JointPosition::new(0.0, 0.5, 4.53)), Some(Joint::Vertical));
-        assert_eq!(k.limit_switch_tripped(&JointPosition::new(-3.06, 0.5, 3.5)), Some(Joint::Shoulder));
+        assert_eq!(
+            k.limit_switch_tripped(&JointPosition::new(0.0, 0.5, 3.5)),
+            None
+        );
+        assert_eq!(
+            k.limit_switch_tripped(&JointPosition::new(0.0, 0.5, 4.53)),
+            Some(Joint::Vertical)
+        );
+        assert_eq!(
+            k.limit_switch_tripped(&JointPosition::new(-3.06, 0.5, 3.5)),
+            Some(Joint::Shoulder)
+        );
     }
 
     fn joints_within_limits() -> impl Strategy<Value = JointPosition> {
         let k = kin();
-        let (s, e, v) = (*k.limits(Joint::Shoulder), *k.limits(Joint::Elbow), *k.limits(Joint::Vertical));
-        (s.min..s.max, prop_oneof![e.min..-0.01, 0.01..e.max], v.min..v.max)
+        let (s, e, v) = (
+            *k.limits(Joint::Shoulder),
+            *k.limits(Joint::Elbow),
+            *k.limits(Joint::Vertical),
+        );
+        (
+            s.min..s.max,
+            prop_oneof![e.min..-0.01, 0.01..e.max],
+            v.min..v.max,
+        )
             .prop_map(|(a, b, c)| JointPosition::new(a, b, c))
     }
 

@@ -57,6 +57,8 @@ pub mod terrain;
 pub use course::{Course, CourseError, Feature, FeatureKind, RandomCourseOptions};
 pub use frames::CarriagePose;
 pub use grid::{CellIndex, Grid, GridError};
-pub use kinematics::{AxisLimits, ElbowBranch, Joint, JointPosition, KinematicsError, LegKinematics};
+pub use kinematics::{
+    AxisLimits, ElbowBranch, Joint, JointPosition, KinematicsError, LegKinematics,
+};
 pub use params::{LegParams, ParamsError, ScannerMount};
 pub use terrain::{HeightField, RayHit, TerrainError};

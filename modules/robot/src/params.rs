@@ -272,7 +272,10 @@ impl LegParams {
         let l = &self.leg;
         let finite_checks: [(&'static str, f64); 10] = [
             ("carriage.x_m", self.carriage.x_m),
-            ("carriage.link_plane_height_m", self.carriage.link_plane_height_m),
+            (
+                "carriage.link_plane_height_m",
+                self.carriage.link_plane_height_m,
+            ),
             ("rails.y_min_m", self.rails.y_min_m),
             ("rails.y_max_m", self.rails.y_max_m),
             ("scanner.position_m", self.scanner.position_m[0]),
@@ -291,27 +294,72 @@ impl LegParams {
             ("leg.foot_radius_m", l.foot_radius_m),
             ("leg.column_radius_m", l.column_radius_m),
             ("leg.force_sensor_above_sole_m", l.force_sensor_above_sole_m),
-            ("leg.shoulder.max_speed_rad_per_s", l.shoulder.max_speed_rad_per_s),
-            ("leg.shoulder.max_accel_rad_per_s2", l.shoulder.max_accel_rad_per_s2),
+            (
+                "leg.shoulder.max_speed_rad_per_s",
+                l.shoulder.max_speed_rad_per_s,
+            ),
+            (
+                "leg.shoulder.max_accel_rad_per_s2",
+                l.shoulder.max_accel_rad_per_s2,
+            ),
             ("leg.elbow.max_speed_rad_per_s", l.elbow.max_speed_rad_per_s),
-            ("leg.elbow.max_accel_rad_per_s2", l.elbow.max_accel_rad_per_s2),
-            ("leg.vertical.max_speed_m_per_s", l.vertical.max_speed_m_per_s),
-            ("leg.vertical.max_accel_m_per_s2", l.vertical.max_accel_m_per_s2),
+            (
+                "leg.elbow.max_accel_rad_per_s2",
+                l.elbow.max_accel_rad_per_s2,
+            ),
+            (
+                "leg.vertical.max_speed_m_per_s",
+                l.vertical.max_speed_m_per_s,
+            ),
+            (
+                "leg.vertical.max_accel_m_per_s2",
+                l.vertical.max_accel_m_per_s2,
+            ),
             ("leg.vertical.min_m", l.vertical.min_m),
             ("contact.stiffness_n_per_m", self.contact.stiffness_n_per_m),
-            ("contact.default_transition_force_n", self.contact.default_transition_force_n),
-            ("contact.friction_coefficient", self.contact.friction_coefficient),
-            ("body_move.compress_force_n", self.body_move.compress_force_n),
-            ("body_move.traction_force_n", self.body_move.traction_force_n),
+            (
+                "contact.default_transition_force_n",
+                self.contact.default_transition_force_n,
+            ),
+            (
+                "contact.friction_coefficient",
+                self.contact.friction_coefficient,
+            ),
+            (
+                "body_move.compress_force_n",
+                self.body_move.compress_force_n,
+            ),
+            (
+                "body_move.traction_force_n",
+                self.body_move.traction_force_n,
+            ),
             ("body_move.gain_per_s", self.body_move.gain_per_s),
-            ("body_move.max_speed_m_per_s", self.body_move.max_speed_m_per_s),
+            (
+                "body_move.max_speed_m_per_s",
+                self.body_move.max_speed_m_per_s,
+            ),
             ("body_move.control_rate_hz", self.body_move.control_rate_hz),
-            ("body_move.position_tolerance_m", self.body_move.position_tolerance_m),
+            (
+                "body_move.position_tolerance_m",
+                self.body_move.position_tolerance_m,
+            ),
             ("body_move.slip_detect_m", self.body_move.slip_detect_m),
-            ("simulation.collision_step_m", self.simulation.collision_step_m),
-            ("simulation.report_period_s", self.simulation.report_period_s),
-            ("simulation.drag_tolerance_m", self.simulation.drag_tolerance_m),
-            ("simulation.servo_error_rad", self.simulation.servo_error_rad),
+            (
+                "simulation.collision_step_m",
+                self.simulation.collision_step_m,
+            ),
+            (
+                "simulation.report_period_s",
+                self.simulation.report_period_s,
+            ),
+            (
+                "simulation.drag_tolerance_m",
+                self.simulation.drag_tolerance_m,
+            ),
+            (
+                "simulation.servo_error_rad",
+                self.simulation.servo_error_rad,
+            ),
             ("simulation.servo_error_m", self.simulation.servo_error_m),
         ];
         for (key, value) in positive_checks {
@@ -319,20 +367,37 @@ impl LegParams {
         }
         let non_negative_checks: [(&'static str, f64); 7] = [
             ("rails.friction_n", self.rails.friction_n),
-            ("compliance.sag_m_per_m_reach", self.compliance.sag_m_per_m_reach),
-            ("compliance.torsion_rad_per_m_offset", self.compliance.torsion_rad_per_m_offset),
-            ("compliance.lateral_m_per_n", self.compliance.lateral_m_per_n),
-            ("compliance.vertical_m_per_n", self.compliance.vertical_m_per_n),
-            ("body_move.min_abs_elbow_rad", self.body_move.min_abs_elbow_rad),
-            ("body_move.force_drop_fraction", self.body_move.force_drop_fraction),
+            (
+                "compliance.sag_m_per_m_reach",
+                self.compliance.sag_m_per_m_reach,
+            ),
+            (
+                "compliance.torsion_rad_per_m_offset",
+                self.compliance.torsion_rad_per_m_offset,
+            ),
+            (
+                "compliance.lateral_m_per_n",
+                self.compliance.lateral_m_per_n,
+            ),
+            (
+                "compliance.vertical_m_per_n",
+                self.compliance.vertical_m_per_n,
+            ),
+            (
+                "body_move.min_abs_elbow_rad",
+                self.body_move.min_abs_elbow_rad,
+            ),
+            (
+                "body_move.force_drop_fraction",
+                self.body_move.force_drop_fraction,
+            ),
         ];
         for (key, value) in non_negative_checks {
             non_negative(key, value)?;
         }
         rotary_axis("leg.shoulder", &l.shoulder)?;
         rotary_axis("leg.elbow", &l.elbow)?;
-        if l.shoulder.min_rad < -std::f64::consts::PI || l.shoulder.max_rad > std::f64::consts::PI
-        {
+        if l.shoulder.min_rad < -std::f64::consts::PI || l.shoulder.max_rad > std::f64::consts::PI {
             return Err(invalid(
                 "leg.shoulder.max_rad",
                 l.shoulder.max_rad,
@@ -341,7 +406,11 @@ impl LegParams {
         }
         let v = &l.vertical;
         if v.max_m <= v.min_m {
-            return Err(invalid("leg.vertical.max_m", v.max_m, "must be greater than leg.vertical.min_m"));
+            return Err(invalid(
+                "leg.vertical.max_m",
+                v.max_m,
+                "must be greater than leg.vertical.min_m",
+            ));
         }
         if v.limit_switch_min_m > v.min_m {
             return Err(invalid(
@@ -365,7 +434,11 @@ impl LegParams {
             ));
         }
         if self.rails.y_max_m <= self.rails.y_min_m {
-            return Err(invalid("rails.y_max_m", self.rails.y_max_m, "must be greater than rails.y_min_m"));
+            return Err(invalid(
+                "rails.y_max_m",
+                self.rails.y_max_m,
+                "must be greater than rails.y_min_m",
+            ));
         }
         if self.body_move.traction_force_n > self.body_move.compress_force_n {
             return Err(invalid(
@@ -390,14 +463,22 @@ fn invalid(key: &'static str, value: f64, reason: &'static str) -> ParamsError {
 }
 
 fn finite(key: &'static str, value: f64) -> Result<()> {
-    if value.is_finite() { Ok(()) } else { Err(invalid(key, value, "must be a finite number")) }
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(key, value, "must be a finite number"))
+    }
 }
 
 fn positive(key: &'static str, value: f64) -> Result<()> {
     if value.is_finite() && value > 0.0 {
         Ok(())
     } else {
-        Err(invalid(key, value, "must be a finite number greater than zero"))
+        Err(invalid(
+            key,
+            value,
+            "must be a finite number greater than zero",
+        ))
     }
 }
 
@@ -434,13 +515,25 @@ fn rotary_axis(prefix: &'static str, axis: &RotaryAxisParams) -> Result<()> {
         finite(key, value)?;
     }
     if axis.max_rad <= axis.min_rad {
-        return Err(invalid(keys[1], axis.max_rad, "must be greater than the axis' min_rad"));
+        return Err(invalid(
+            keys[1],
+            axis.max_rad,
+            "must be greater than the axis' min_rad",
+        ));
     }
     if axis.limit_switch_min_rad > axis.min_rad {
-        return Err(invalid(keys[2], axis.limit_switch_min_rad, "the limit switch must sit at or below min_rad"));
+        return Err(invalid(
+            keys[2],
+            axis.limit_switch_min_rad,
+            "the limit switch must sit at or below min_rad",
+        ));
     }
     if axis.limit_switch_max_rad < axis.max_rad {
-        return Err(invalid(keys[3], axis.limit_switch_max_rad, "the limit switch must sit at or above max_rad"));
+        return Err(invalid(
+            keys[3],
+            axis.limit_switch_max_rad,
+            "the limit switch must sit at or above max_rad",
+        ));
     }
     Ok(())
 }
@@ -471,7 +564,8 @@ mod tests {
 
     #[test]
     fn unknown_key_is_named() {
-        let text = DEFAULT_PARAMS_TOML.replace("friction_n = 450.0", "friction_n = 450.0\nfrictoin = 1.0");
+        let text =
+            DEFAULT_PARAMS_TOML.replace("friction_n = 450.0", "friction_n = 450.0\nfrictoin = 1.0");
         let err = LegParams::from_toml_str(&text).unwrap_err().to_string();
         assert!(err.contains("frictoin"), "{err}");
     }
@@ -492,21 +586,29 @@ mod tests {
 
     #[test]
     fn bad_value_is_refused_with_its_key() {
-        let text = DEFAULT_PARAMS_TOML.replace("max_speed_m_per_s = 0.036", "max_speed_m_per_s = -0.036");
+        let text =
+            DEFAULT_PARAMS_TOML.replace("max_speed_m_per_s = 0.036", "max_speed_m_per_s = -0.036");
         match LegParams::from_toml_str(&text) {
-            Err(ParamsError::Invalid { key, .. }) => assert_eq!(key, "leg.vertical.max_speed_m_per_s"),
+            Err(ParamsError::Invalid { key, .. }) => {
+                assert_eq!(key, "leg.vertical.max_speed_m_per_s")
+            }
             other => panic!("expected an invalid key, got {other:?}"),
         }
-        let text = DEFAULT_PARAMS_TOML.replace("limit_switch_max_m = 4.52", "limit_switch_max_m = 4.4");
+        let text =
+            DEFAULT_PARAMS_TOML.replace("limit_switch_max_m = 4.52", "limit_switch_max_m = 4.4");
         match LegParams::from_toml_str(&text) {
-            Err(ParamsError::Invalid { key, .. }) => assert_eq!(key, "leg.vertical.limit_switch_max_m"),
+            Err(ParamsError::Invalid { key, .. }) => {
+                assert_eq!(key, "leg.vertical.limit_switch_max_m")
+            }
             other => panic!("expected an invalid key, got {other:?}"),
         }
     }
 
     #[test]
     fn load_reports_a_missing_file() {
-        let err = LegParams::load("/nonexistent/leg.toml").unwrap_err().to_string();
+        let err = LegParams::load("/nonexistent/leg.toml")
+            .unwrap_err()
+            .to_string();
         assert!(err.contains("/nonexistent/leg.toml"), "{err}");
     }
 }

@@ -14,29 +14,60 @@ const PYLON_RADIUS_M: f64 = 0.18;
 const PYLON_HEIGHT_M: f64 = 0.70;
 
 fn boxed(name: &str, x: f64, y: f64, size_x_m: f64, size_y_m: f64, height_m: f64) -> Feature {
-    Feature::new(name, FeatureKind::Box { center: Point2::new(x, y), size_x_m, size_y_m, height_m })
+    Feature::new(
+        name,
+        FeatureKind::Box {
+            center: Point2::new(x, y),
+            size_x_m,
+            size_y_m,
+            height_m,
+        },
+    )
 }
 
 fn pylon(name: String, x: f64, y: f64) -> Feature {
     Feature::new(
         name,
-        FeatureKind::Cone { center: Point2::new(x, y), base_radius_m: PYLON_RADIUS_M, height_m: PYLON_HEIGHT_M },
+        FeatureKind::Cone {
+            center: Point2::new(x, y),
+            base_radius_m: PYLON_RADIUS_M,
+            height_m: PYLON_HEIGHT_M,
+        },
     )
 }
 
 fn rock(name: &str, x: f64, y: f64, radius_m: f64, height_m: f64) -> Feature {
-    Feature::new(name, FeatureKind::Rock { center: Point2::new(x, y), radius_m, height_m })
+    Feature::new(
+        name,
+        FeatureKind::Rock {
+            center: Point2::new(x, y),
+            radius_m,
+            height_m,
+        },
+    )
 }
 
 fn trench(name: &str, min: (f64, f64), max: (f64, f64), depth_m: f64, wall_m: f64) -> Feature {
     Feature::new(
         name,
-        FeatureKind::Trench { min: Point2::new(min.0, min.1), max: Point2::new(max.0, max.1), depth_m, wall_m },
+        FeatureKind::Trench {
+            min: Point2::new(min.0, min.1),
+            max: Point2::new(max.0, max.1),
+            depth_m,
+            wall_m,
+        },
     )
 }
 
 fn rolling(amplitude_m: f64, wavelength_m: f64, phase_rad: f64) -> Feature {
-    Feature::new("rolling-sand", FeatureKind::RollingSand { amplitude_m, wavelength_m, phase_rad })
+    Feature::new(
+        "rolling-sand",
+        FeatureKind::RollingSand {
+            amplitude_m,
+            wavelength_m,
+            phase_rad,
+        },
+    )
 }
 
 /// Course 1 (Summer 1989, Figure 12): level and gently rolling sand, two trenches and a few
@@ -54,7 +85,11 @@ pub(super) fn course_1() -> Course {
             boxed("box-1", 1.2, 5.6, 0.40, 0.30, 0.25),
             Feature::new(
                 "cone-1",
-                FeatureKind::Cone { center: Point2::new(4.2, 8.9), base_radius_m: 0.12, height_m: 0.30 },
+                FeatureKind::Cone {
+                    center: Point2::new(4.2, 8.9),
+                    base_radius_m: 0.12,
+                    height_m: 0.30,
+                },
             ),
         ],
     }
@@ -85,7 +120,10 @@ pub(super) fn course_2() -> Course {
         rock("rock-3", 2.8, 8.9, 0.30, 0.25),
         rock("rock-4", 3.6, 5.6, 0.30, 0.20),
     ]);
-    Course { name: "course 2".into(), features }
+    Course {
+        name: "course 2".into(),
+        features,
+    }
 }
 
 /// Course 3 (Figure 15): course 2 plus the large box ("Sun") at the beginning, taller than
@@ -93,7 +131,9 @@ pub(super) fn course_2() -> Course {
 pub(super) fn course_3() -> Course {
     let mut course = course_2();
     course.name = "course 3".into();
-    course.features.push(boxed("sun-box", 3.3, 2.1, 0.90, 0.60, 1.20));
+    course
+        .features
+        .push(boxed("sun-box", 3.3, 2.1, 0.90, 0.60, 1.20));
     course
 }
 
@@ -108,13 +148,24 @@ pub(super) fn course_4() -> Course {
         .collect();
     for r in 0..4 {
         for c in 0..3 {
-            features.push(pylon(format!("dense-pylon-{}-{}", r + 1, c + 1), 0.8 + 0.35 * c as f64, 2.9 + 0.35 * r as f64));
+            features.push(pylon(
+                format!("dense-pylon-{}-{}", r + 1, c + 1),
+                0.8 + 0.35 * c as f64,
+                2.9 + 0.35 * r as f64,
+            ));
         }
     }
     features.push(Feature::new(
         "sand-hill",
-        FeatureKind::Hill { center: Point2::new(1.5, 6.0), radius_m: 1.1, height_m: 0.5 },
+        FeatureKind::Hill {
+            center: Point2::new(1.5, 6.0),
+            radius_m: 1.1,
+            height_m: 0.5,
+        },
     ));
     features.push(trench("deep-trench", (0.3, 8.0), (2.8, 8.7), 0.90, 0.05));
-    Course { name: "course 4".into(), features }
+    Course {
+        name: "course 4".into(),
+        features,
+    }
 }

@@ -100,20 +100,43 @@ pub struct Feature {
 impl Feature {
     /// A named feature.
     pub fn new(name: impl Into<String>, kind: FeatureKind) -> Self {
-        Self { name: name.into(), kind }
+        Self {
+            name: name.into(),
+            kind,
+        }
     }
 
     /// The XY rectangle (min, max) the feature changes, or `None` for features covering
     /// the whole pit (rolling sand).
     pub fn footprint(&self) -> Option<(Point2<f64>, Point2<f64>)> {
         let around = |c: &Point2<f64>, rx: f64, ry: f64| {
-            Some((Point2::new(c.x - rx, c.y - ry), Point2::new(c.x + rx, c.y + ry)))
+            Some((
+                Point2::new(c.x - rx, c.y - ry),
+                Point2::new(c.x + rx, c.y + ry),
+            ))
         };
         match &self.kind {
-            FeatureKind::Box { center, size_x_m, size_y_m, .. } => around(center, 0.5 * size_x_m, 0.5 * size_y_m),
-            FeatureKind::Cone { center, base_radius_m: r, .. }
-            | FeatureKind::Rock { center, radius_m: r, .. }
-            | FeatureKind::Hill { center, radius_m: r, .. } => around(center, *r, *r),
+            FeatureKind::Box {
+                center,
+                size_x_m,
+                size_y_m,
+                ..
+            } => around(center, 0.5 * size_x_m, 0.5 * size_y_m),
+            FeatureKind::Cone {
+                center,
+                base_radius_m: r,
+                ..
+            }
+            | FeatureKind::Rock {
+                center,
+                radius_m: r,
+                ..
+            }
+            | FeatureKind::Hill {
+                center,
+                radius_m: r,
+                ..
+            } => around(center, *r, *r),
             FeatureKind::Trench { min, max, .. } => Some((*min, *max)),
             FeatureKind::RollingSand { .. } => None,
         }
@@ -129,24 +152,46 @@ impl Feature {
 
     /// Whether the feature's footprint contains the XY point.
     pub fn contains(&self, p: Point2<f64>) -> bool {
-        self.footprint().is_none_or(|(lo, hi)| p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y)
+        self.footprint()
+            .is_none_or(|(lo, hi)| p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y)
     }
 
     /// Whether the feature is an object resting on the sand (box, cone, rock).
     pub fn is_object(&self) -> bool {
-        matches!(self.kind, FeatureKind::Box { .. } | FeatureKind::Cone { .. } | FeatureKind::Rock { .. })
+        matches!(
+            self.kind,
+            FeatureKind::Box { .. } | FeatureKind::Cone { .. } | FeatureKind::Rock { .. }
+        )
     }
 
     /// Change of the sand surface at `p` (sand features only; zero for objects).
     fn sand_offset(&self, p: Point2<f64>) -> f64 {
         match &self.kind {
-            FeatureKind::RollingSand { amplitude_m, wavelength_m, phase_rad } => {
+            FeatureKind::RollingSand {
+                amplitude_m,
+                wavelength_m,
+                phase_rad,
+            } => {
                 let k = std::f64::consts::TAU / wavelength_m;
-                amplitude_m * 0.5 * ((k * p.x + phase_rad).sin() + (k / 1.3 * p.y + 2.0 * phase_rad).sin())
+                amplitude_m
+                    * 0.5
+                    * ((k * p.x + phase_rad).sin() + (k / 1.3 * p.y + 2.0 * phase_rad).sin())
             }
-            FeatureKind::Hill { center, radius_m, height_m } => height_m * bump((p - center).norm() / radius_m),
-            FeatureKind::Trench { min, max, depth_m, wall_m } => {
-                let inside = (p.x - min.x).min(max.x - p.x).min(p.y - min.y).min(max.y - p.y);
+            FeatureKind::Hill {
+                center,
+                radius_m,
+                height_m,
+            } => height_m * bump((p - center).norm() / radius_m),
+            FeatureKind::Trench {
+                min,
+                max,
+                depth_m,
+                wall_m,
+            } => {
+                let inside = (p.x - min.x)
+                    .min(max.x - p.x)
+                    .min(p.y - min.y)
+                    .min(max.y - p.y);
                 if inside <= 0.0 {
                     0.0
                 } else if *wall_m <= 0.0 {
@@ -162,15 +207,27 @@ impl Feature {
     /// Height of an object's surface above its base at `p`, or `None` outside it.
     fn object_height(&self, p: Point2<f64>) -> Option<f64> {
         match &self.kind {
-            FeatureKind::Box { center, size_x_m, size_y_m, height_m } => {
-                ((p.x - center.x).abs() <= 0.5 * size_x_m && (p.y - center.y).abs() <= 0.5 * size_y_m)
-                    .then_some(*height_m)
-            }
-            FeatureKind::Cone { center, base_radius_m, height_m } => {
+            FeatureKind::Box {
+                center,
+                size_x_m,
+                size_y_m,
+                height_m,
+            } => ((p.x - center.x).abs() <= 0.5 * size_x_m
+                && (p.y - center.y).abs() <= 0.5 * size_y_m)
+                .then_some(*height_m),
+            FeatureKind::Cone {
+                center,
+                base_radius_m,
+                height_m,
+            } => {
                 let d = (p - center).norm() / base_radius_m;
                 (d <= 1.0).then(|| height_m * (1.0 - d))
             }
-            FeatureKind::Rock { center, radius_m, height_m } => {
+            FeatureKind::Rock {
+                center,
+                radius_m,
+                height_m,
+            } => {
                 let d = (p - center).norm() / radius_m;
                 (d <= 1.0).then(|| height_m * bump(d))
             }
@@ -181,7 +238,11 @@ impl Feature {
 
 /// Raised cosine: 1 at 0, 0 at 1 and beyond, smooth.
 fn bump(d: f64) -> f64 {
-    if d >= 1.0 { 0.0 } else { 0.5 + 0.5 * (std::f64::consts::PI * d).cos() }
+    if d >= 1.0 {
+        0.0
+    } else {
+        0.5 + 0.5 * (std::f64::consts::PI * d).cos()
+    }
 }
 
 /// Why a course could not be made.
@@ -234,12 +295,18 @@ impl Course {
     /// The features whose names start with `prefix` (e.g. `"pylon-"`).
     pub fn features_named(&self, prefix: &str) -> impl Iterator<Item = &Feature> + '_ {
         let prefix = prefix.to_owned();
-        self.features.iter().filter(move |f| f.name.starts_with(&prefix))
+        self.features
+            .iter()
+            .filter(move |f| f.name.starts_with(&prefix))
     }
 
     /// Height of the sand surface (without objects) at `p`, metres.
     pub fn sand_height_at(&self, p: Point2<f64>) -> f64 {
-        self.features.iter().filter(|f| !f.is_object()).map(|f| f.sand_offset(p)).sum()
+        self.features
+            .iter()
+            .filter(|f| !f.is_object())
+            .map(|f| f.sand_offset(p))
+            .sum()
     }
 
     /// The course rendered at [`DEFAULT_RESOLUTION_M`] (2 cm) over the whole pit.
@@ -254,8 +321,10 @@ impl Course {
     /// The course rendered over the whole pit with samples every `resolution_m`.
     pub fn render(&self, resolution_m: f64) -> Result<HeightField, TerrainError> {
         let min = Point2::origin();
-        let (nx, ny) = samples_covering(min, Point2::new(PIT_SIZE_X_M, PIT_SIZE_Y_M), resolution_m)?;
-        let node = |ix: usize, iy: usize| Point2::new(ix as f64 * resolution_m, iy as f64 * resolution_m);
+        let (nx, ny) =
+            samples_covering(min, Point2::new(PIT_SIZE_X_M, PIT_SIZE_Y_M), resolution_m)?;
+        let node =
+            |ix: usize, iy: usize| Point2::new(ix as f64 * resolution_m, iy as f64 * resolution_m);
         let mut heights = vec![0.0; nx * ny];
         let index_range = |lo: f64, hi: f64, n: usize| {
             let a = (lo / resolution_m).floor().max(0.0) as usize;
@@ -286,7 +355,9 @@ impl Course {
             if let Some((lo, hi)) = f.footprint() {
                 for iy in index_range(lo.y, hi.y, ny) {
                     for ix in index_range(lo.x, hi.x, nx) {
-                        if let (Some(top), Some(h)) = (f.object_height(node(ix, iy)), heights.get_mut(iy * nx + ix)) {
+                        if let (Some(top), Some(h)) =
+                            (f.object_height(node(ix, iy)), heights.get_mut(iy * nx + ix))
+                        {
                             *h = h.max(base + top);
                         }
                     }

@@ -71,12 +71,21 @@ pub(super) fn generate(seed: u64, options: &RandomCourseOptions) -> Course {
         .collect();
     let mut placed: Vec<(Point2<f64>, Point2<f64>)> = Vec::new();
     let mut try_place = |feature: Feature, features: &mut Vec<Feature>| {
-        let Some((lo, hi)) = feature.footprint() else { return };
+        let Some((lo, hi)) = feature.footprint() else {
+            return;
+        };
         let margin = 0.05;
-        let (lo, hi) = (Point2::new(lo.x - margin, lo.y - margin), Point2::new(hi.x + margin, hi.y + margin));
+        let (lo, hi) = (
+            Point2::new(lo.x - margin, lo.y - margin),
+            Point2::new(hi.x + margin, hi.y + margin),
+        );
         let inside_pit = lo.x >= 0.1 && lo.y >= 1.6 && hi.x <= PIT_SIZE_X_M - 0.1 && hi.y <= 10.8;
-        let clear_of_footfalls = reserved.iter().all(|c| rect_disc_distance(lo, hi, *c) > RESERVED_RADIUS_M);
-        let clear_of_others = placed.iter().all(|(a, b)| lo.x > b.x || hi.x < a.x || lo.y > b.y || hi.y < a.y);
+        let clear_of_footfalls = reserved
+            .iter()
+            .all(|c| rect_disc_distance(lo, hi, *c) > RESERVED_RADIUS_M);
+        let clear_of_others = placed
+            .iter()
+            .all(|(a, b)| lo.x > b.x || hi.x < a.x || lo.y > b.y || hi.y < a.y);
         if inside_pit && clear_of_footfalls && clear_of_others {
             placed.push((lo, hi));
             features.push(feature);
@@ -87,7 +96,10 @@ pub(super) fn generate(seed: u64, options: &RandomCourseOptions) -> Course {
     for i in 0..trenches {
         for _ in 0..attempts {
             let (len, width) = (rng.random_range(0.8..2.5), rng.random_range(0.3..0.6));
-            let (x, y) = (rng.random_range(0.2..PIT_SIZE_X_M - 0.2 - len), rng.random_range(2.0..10.0));
+            let (x, y) = (
+                rng.random_range(0.2..PIT_SIZE_X_M - 0.2 - len),
+                rng.random_range(2.0..10.0),
+            );
             let depth = rng.random_range(0.1..=options.max_trench_depth_m.max(0.1));
             let before = features.len();
             try_place(
@@ -116,7 +128,10 @@ pub(super) fn generate(seed: u64, options: &RandomCourseOptions) -> Course {
                 Feature::new(
                     format!("hill-{}", i + 1),
                     FeatureKind::Hill {
-                        center: Point2::new(rng.random_range(0.5..5.5), rng.random_range(2.0..10.0)),
+                        center: Point2::new(
+                            rng.random_range(0.5..5.5),
+                            rng.random_range(2.0..10.0),
+                        ),
                         radius_m: r,
                         height_m: rng.random_range(0.1..0.4),
                     },
@@ -165,7 +180,10 @@ pub(super) fn generate(seed: u64, options: &RandomCourseOptions) -> Course {
             }
         }
     }
-    Course { name: format!("random {seed}"), features }
+    Course {
+        name: format!("random {seed}"),
+        features,
+    }
 }
 
 /// Distance from a point to an axis-aligned rectangle (0 inside).

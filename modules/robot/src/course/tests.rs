@@ -10,7 +10,9 @@ use crate::LegParams;
 fn clear_footfall(t: &HeightField, c: Point2<f64>) -> bool {
     let r = 0.35;
     let grid = t.grid();
-    let Some((xs, ys)) = grid.cell_range(Point2::new(c.x - r, c.y - r), Point2::new(c.x + r, c.y + r)) else {
+    let Some((xs, ys)) =
+        grid.cell_range(Point2::new(c.x - r, c.y - r), Point2::new(c.x + r, c.y + r))
+    else {
         return false;
     };
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -40,13 +42,19 @@ fn assert_walkable(course: &Course) {
             for i in 0..=44 {
                 let x = 0.8 + 0.1 * i as f64;
                 let c = Point2::new(x, y);
-                if (c - Point2::new(params.carriage.x_m, stop)).norm() <= reach && clear_footfall(&t, c) {
+                if (c - Point2::new(params.carriage.x_m, stop)).norm() <= reach
+                    && clear_footfall(&t, c)
+                {
                     found = Some(c);
                     break 'search;
                 }
             }
         }
-        assert!(found.is_some(), "{}: no clear footfall ahead of carriage y = {stop}", course.name);
+        assert!(
+            found.is_some(),
+            "{}: no clear footfall ahead of carriage y = {stop}",
+            course.name
+        );
         stop += 1.5;
     }
 }
@@ -56,7 +64,10 @@ fn builtin_courses_are_walkable() {
     for n in 1..=4 {
         assert_walkable(&Course::builtin(n).unwrap());
     }
-    assert!(matches!(Course::builtin(5), Err(CourseError::UnknownCourse(5))));
+    assert!(matches!(
+        Course::builtin(5),
+        Err(CourseError::UnknownCourse(5))
+    ));
 }
 
 #[test]
@@ -64,7 +75,11 @@ fn random_courses_are_walkable_and_deterministic() {
     for seed in 0..12 {
         let c = Course::random(seed);
         assert_eq!(c, Course::random(seed));
-        assert!(c.features.len() >= 8, "seed {seed}: only {} features", c.features.len());
+        assert!(
+            c.features.len() >= 8,
+            "seed {seed}: only {} features",
+            c.features.len()
+        );
         assert_walkable(&c);
     }
     assert_ne!(Course::random(1), Course::random(2));
@@ -91,7 +106,10 @@ fn course_2_is_a_steeplechase_with_boxes_and_rocks() {
     let pylons: Vec<_> = c.features_named("pylon-").collect();
     assert!(pylons.len() >= 12);
     // Rows across the pit: pylons of a row share a Y.
-    let rows: std::collections::BTreeSet<i64> = pylons.iter().map(|p| (p.center().y * 10.0).round() as i64).collect();
+    let rows: std::collections::BTreeSet<i64> = pylons
+        .iter()
+        .map(|p| (p.center().y * 10.0).round() as i64)
+        .collect();
     assert!(rows.len() >= 4);
     assert!(c.features_named("box-").count() >= 2);
     assert!(c.features_named("rock-").count() >= 3);
@@ -113,10 +131,16 @@ fn course_3_adds_the_big_box_at_the_beginning() {
     assert_eq!(c3.features.len(), c2.features.len() + 1);
     let centre = sun.center();
     assert!(centre.y < 3.0, "at the beginning: {centre}");
-    assert!((centre.x - params.carriage.x_m).abs() < 0.5, "in the leg's way");
+    assert!(
+        (centre.x - params.carriage.x_m).abs() < 0.5,
+        "in the leg's way"
+    );
     let t = c3.height_field();
     let top = t.height_at(centre.x, centre.y);
-    assert!(top > foot_top + 0.1, "taller ({top}) than the foot can lift ({foot_top})");
+    assert!(
+        top > foot_top + 0.1,
+        "taller ({top}) than the foot can lift ({foot_top})"
+    );
 }
 
 #[test]
@@ -125,12 +149,29 @@ fn course_4_has_course_3_on_the_right_and_the_new_obstacles_on_the_left() {
     let foot_bottom = params.carriage.link_plane_height_m - params.leg.vertical.max_m;
     let c3 = Course::builtin(3).unwrap();
     let c4 = Course::builtin(4).unwrap();
-    for f in c3.features.iter().filter(|f| f.footprint().is_some() && f.center().x >= 3.0) {
-        assert_eq!(c4.feature(&f.name), Some(f), "course 4 keeps {} on the right", f.name);
+    for f in c3
+        .features
+        .iter()
+        .filter(|f| f.footprint().is_some() && f.center().x >= 3.0)
+    {
+        assert_eq!(
+            c4.feature(&f.name),
+            Some(f),
+            "course 4 keeps {} on the right",
+            f.name
+        );
     }
     assert!(c4.feature("sun-box").is_some());
-    for f in c4.features.iter().filter(|f| f.footprint().is_some() && f.center().x < 3.0) {
-        assert!(c3.feature(&f.name).is_none(), "{} is new on the left", f.name);
+    for f in c4
+        .features
+        .iter()
+        .filter(|f| f.footprint().is_some() && f.center().x < 3.0)
+    {
+        assert!(
+            c3.feature(&f.name).is_none(),
+            "{} is new on the left",
+            f.name
+        );
     }
     // Pylons too close for the 30 cm foot.
     let dense: Vec<_> = c4.features_named("dense-pylon-").collect();
@@ -141,8 +182,13 @@ fn course_4_has_course_3_on_the_right_and_the_new_obstacles_on_the_left() {
             .filter(|b| b.name != a.name)
             .map(|b| (b.center() - a.center()).norm())
             .fold(f64::INFINITY, f64::min);
-        let FeatureKind::Cone { base_radius_m, .. } = a.kind else { panic!("pylons are cones") };
-        assert!(nearest - 2.0 * base_radius_m < 0.30, "gap {nearest} leaves room for the foot");
+        let FeatureKind::Cone { base_radius_m, .. } = a.kind else {
+            panic!("pylons are cones")
+        };
+        assert!(
+            nearest - 2.0 * base_radius_m < 0.30,
+            "gap {nearest} leaves room for the foot"
+        );
         assert!(a.center().x < 3.0);
     }
     let hill = c4.feature("sand-hill").unwrap();
@@ -150,7 +196,10 @@ fn course_4_has_course_3_on_the_right_and_the_new_obstacles_on_the_left() {
     let t = c4.height_field();
     assert!(hill.center().x < 3.0 && t.height_at(hill.center().x, hill.center().y) > 0.4);
     let floor = t.height_at(trench.center().x, trench.center().y);
-    assert!(trench.center().x < 3.0 && floor < foot_bottom - 0.2, "floor {floor} beyond reach {foot_bottom}");
+    assert!(
+        trench.center().x < 3.0 && floor < foot_bottom - 0.2,
+        "floor {floor} beyond reach {foot_bottom}"
+    );
 }
 
 #[test]

@@ -100,7 +100,10 @@ struct Header {
 }
 
 fn syntax(line: usize, reason: impl Into<String>) -> AscError {
-    AscError::Syntax { line, reason: reason.into() }
+    AscError::Syntax {
+        line,
+        reason: reason.into(),
+    }
 }
 
 impl AscGrid {
@@ -119,9 +122,14 @@ impl AscGrid {
                 break;
             }
             lines.next();
-            let value = tokens.next().ok_or_else(|| syntax(n, format!("header key `{key}` has no value")))?;
+            let value = tokens
+                .next()
+                .ok_or_else(|| syntax(n, format!("header key `{key}` has no value")))?;
             if let Some(extra) = tokens.next() {
-                return Err(syntax(n, format!("unexpected `{extra}` after the value of `{key}`")));
+                return Err(syntax(
+                    n,
+                    format!("unexpected `{extra}` after the value of `{key}`"),
+                ));
             }
             let number = || -> Result<f64, AscError> {
                 value
@@ -135,21 +143,33 @@ impl AscGrid {
                     .parse::<usize>()
                     .ok()
                     .filter(|&v| v > 0)
-                    .ok_or_else(|| syntax(n, format!("`{key}` must be a whole number above zero, got `{value}`")))
+                    .ok_or_else(|| {
+                        syntax(
+                            n,
+                            format!("`{key}` must be a whole number above zero, got `{value}`"),
+                        )
+                    })
             };
             let lower = key.to_ascii_lowercase();
             let duplicate = || syntax(n, format!("header key `{key}` is given twice"));
             match lower.as_str() {
                 "ncols" => set_once(&mut header.ncols, count()?).ok_or_else(duplicate)?,
                 "nrows" => set_once(&mut header.nrows, count()?).ok_or_else(duplicate)?,
-                "xllcorner" | "xllcenter" => set_once(&mut header.xll, (number()?, lower == "xllcenter"))
-                    .ok_or_else(|| syntax(n, "give either xllcorner or xllcenter, once"))?,
-                "yllcorner" | "yllcenter" => set_once(&mut header.yll, (number()?, lower == "yllcenter"))
-                    .ok_or_else(|| syntax(n, "give either yllcorner or yllcenter, once"))?,
+                "xllcorner" | "xllcenter" => {
+                    set_once(&mut header.xll, (number()?, lower == "xllcenter"))
+                        .ok_or_else(|| syntax(n, "give either xllcorner or xllcenter, once"))?
+                }
+                "yllcorner" | "yllcenter" => {
+                    set_once(&mut header.yll, (number()?, lower == "yllcenter"))
+                        .ok_or_else(|| syntax(n, "give either yllcorner or yllcenter, once"))?
+                }
                 "cellsize" => {
                     let v = number()?;
                     if v <= 0.0 {
-                        return Err(syntax(n, format!("cellsize must be greater than zero, got {v}")));
+                        return Err(syntax(
+                            n,
+                            format!("cellsize must be greater than zero, got {v}"),
+                        ));
                     }
                     set_once(&mut header.cellsize, v).ok_or_else(duplicate)?
                 }
@@ -166,14 +186,26 @@ impl AscGrid {
             }
         }
         let first_data_line = lines.peek().map_or(text.lines().count() + 1, |&(n, _)| n);
-        let missing = |key: &str| syntax(first_data_line, format!("missing header key `{key}` before the data"));
+        let missing = |key: &str| {
+            syntax(
+                first_data_line,
+                format!("missing header key `{key}` before the data"),
+            )
+        };
         let ncols = header.ncols.ok_or_else(|| missing("ncols"))?;
         let nrows = header.nrows.ok_or_else(|| missing("nrows"))?;
-        let (xll, x_centre) = header.xll.ok_or_else(|| missing("xllcorner or xllcenter"))?;
-        let (yll, y_centre) = header.yll.ok_or_else(|| missing("yllcorner or yllcenter"))?;
+        let (xll, x_centre) = header
+            .xll
+            .ok_or_else(|| missing("xllcorner or xllcenter"))?;
+        let (yll, y_centre) = header
+            .yll
+            .ok_or_else(|| missing("yllcorner or yllcenter"))?;
         let cellsize = header.cellsize.ok_or_else(|| missing("cellsize"))?;
         if ncols.checked_mul(nrows).is_none_or(|c| c > MAX_CELLS) {
-            return Err(syntax(first_data_line, format!("grid of {ncols} x {nrows} cells is too large")));
+            return Err(syntax(
+                first_data_line,
+                format!("grid of {ncols} x {nrows} cells is too large"),
+            ));
         }
         let origin = Point2::new(
             if x_centre { xll } else { xll + 0.5 * cellsize },
@@ -196,45 +228,68 @@ impl AscGrid {
             for token in line.split_whitespace() {
                 if col == ncols {
                     let extra = line.split_whitespace().count();
-                    return Err(syntax(n, format!("row {row} has {extra} values, expected ncols = {ncols}")));
+                    return Err(syntax(
+                        n,
+                        format!("row {row} has {extra} values, expected ncols = {ncols}"),
+                    ));
                 }
                 let v: f64 = token.parse().map_err(|_| {
-                    syntax(n, format!("value `{token}` in column {col} is not a number"))
+                    syntax(
+                        n,
+                        format!("value `{token}` in column {col} is not a number"),
+                    )
                 })?;
                 let sample = if header.nodata == Some(v) {
                     None
                 } else if v.is_finite() {
                     Some(v)
                 } else {
-                    return Err(syntax(n, format!("value `{token}` in column {col} is not a finite number")));
+                    return Err(syntax(
+                        n,
+                        format!("value `{token}` in column {col} is not a finite number"),
+                    ));
                 };
                 cells[iy * ncols + col] = sample;
                 col += 1;
             }
             if col != ncols {
-                return Err(syntax(n, format!("row {row} has {col} values, expected ncols = {ncols}")));
+                return Err(syntax(
+                    n,
+                    format!("row {row} has {col} values, expected ncols = {ncols}"),
+                ));
             }
             row += 1;
         }
         if row < nrows {
-            return Err(syntax(last_line + 1, format!("file ends after {row} of nrows = {nrows} rows")));
+            return Err(syntax(
+                last_line + 1,
+                format!("file ends after {row} of nrows = {nrows} rows"),
+            ));
         }
         let grid = Grid::from_vec(origin, cellsize, ncols, nrows, cells)
             .map_err(|e| syntax(first_data_line, e.to_string()))?;
-        Ok(Self { grid, nodata_value: header.nodata })
+        Ok(Self {
+            grid,
+            nodata_value: header.nodata,
+        })
     }
 
     /// Reads and parses an `.asc` file.
     pub fn read(path: impl AsRef<Path>) -> Result<Self, AscError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| AscError::Io { path: path.display().to_string(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| AscError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
         Self::parse(&text)
     }
 
     /// The samples of a height field (none missing).
     pub fn from_height_field(terrain: &HeightField) -> Self {
-        Self { grid: terrain.grid().map(|&h| Some(h)), nodata_value: None }
+        Self {
+            grid: terrain.grid().map(|&h| Some(h)),
+            nodata_value: None,
+        }
     }
 
     /// A height field from the samples, treating NODATA as `policy` says.
@@ -243,14 +298,19 @@ impl AscGrid {
         let fill = match policy {
             NoData::Refuse => {
                 if let Some((c, _)) = self.grid.iter().find(|(_, v)| v.is_none()) {
-                    return Err(AscError::NoData { row: self.grid.ny() - 1 - c.iy, col: c.ix });
+                    return Err(AscError::NoData {
+                        row: self.grid.ny() - 1 - c.iy,
+                        col: c.ix,
+                    });
                 }
                 0.0
             }
             NoData::FillWith(h) => h,
             NoData::FillLowest => lowest.ok_or(AscError::AllNoData)?,
         };
-        Ok(HeightField::from_grid(self.grid.map(|v| v.unwrap_or(fill)))?)
+        Ok(HeightField::from_grid(
+            self.grid.map(|v| v.unwrap_or(fill)),
+        )?)
     }
 
     /// The file text: `xllcorner`/`yllcorner` header, rows north to south. Numbers are
@@ -275,7 +335,11 @@ impl AscGrid {
                 if ix > 0 {
                     s.push(' ');
                 }
-                let v = g.get(CellIndex::new(ix, iy)).copied().flatten().unwrap_or(nodata);
+                let v = g
+                    .get(CellIndex::new(ix, iy))
+                    .copied()
+                    .flatten()
+                    .unwrap_or(nodata);
                 let _ = write!(s, "{v}");
             }
             s.push('\n');
@@ -286,8 +350,10 @@ impl AscGrid {
     /// Writes the file.
     pub fn write(&self, path: impl AsRef<Path>) -> Result<(), AscError> {
         let path = path.as_ref();
-        std::fs::write(path, self.to_asc_string())
-            .map_err(|source| AscError::Io { path: path.display().to_string(), source })
+        std::fs::write(path, self.to_asc_string()).map_err(|source| AscError::Io {
+            path: path.display().to_string(),
+            source,
+        })
     }
 }
 
@@ -333,8 +399,16 @@ mod tests {
         assert_eq!(a.grid.get(CellIndex::new(2, 1)), Some(&Some(3.0)));
         let t = a.to_height_field(NoData::FillLowest).unwrap();
         assert_eq!(t.height_at(1.75, 2.25), 1.0);
-        assert!(matches!(a.to_height_field(NoData::Refuse), Err(AscError::NoData { row: 1, col: 1 })));
-        assert_eq!(a.to_height_field(NoData::FillWith(-1.0)).unwrap().height_at(1.75, 2.25), -1.0);
+        assert!(matches!(
+            a.to_height_field(NoData::Refuse),
+            Err(AscError::NoData { row: 1, col: 1 })
+        ));
+        assert_eq!(
+            a.to_height_field(NoData::FillWith(-1.0))
+                .unwrap()
+                .height_at(1.75, 2.25),
+            -1.0
+        );
     }
 
     #[test]
@@ -350,7 +424,14 @@ mod tests {
         let a = AscGrid::parse(SMALL).unwrap();
         let again = AscGrid::parse(&a.to_asc_string()).unwrap();
         assert_eq!(a, again);
-        let t = HeightField::new(Point2::new(0.01, -3.0), 0.02, 4, 3, (0..12).map(|i| i as f64 * 0.1234567).collect()).unwrap();
+        let t = HeightField::new(
+            Point2::new(0.01, -3.0),
+            0.02,
+            4,
+            3,
+            (0..12).map(|i| i as f64 * 0.1234567).collect(),
+        )
+        .unwrap();
         let back = AscGrid::parse(&AscGrid::from_height_field(&t).to_asc_string())
             .unwrap()
             .to_height_field(NoData::Refuse)
@@ -364,7 +445,8 @@ mod tests {
         assert_eq!(line, 5);
         assert!(reason.contains("cellsize"), "{reason}");
 
-        let (line, reason) = err_of("ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize -1\n1 2 3\n");
+        let (line, reason) =
+            err_of("ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize -1\n1 2 3\n");
         assert_eq!(line, 5);
         assert!(reason.contains("greater than zero"), "{reason}");
 
@@ -372,23 +454,28 @@ mod tests {
         assert_eq!(line, 4);
         assert!(reason.contains("not a number"), "{reason}");
 
-        let (line, reason) = err_of("ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n4 5\n");
+        let (line, reason) =
+            err_of("ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n4 5\n");
         assert_eq!(line, 7);
         assert!(reason.contains("2 values, expected ncols = 3"), "{reason}");
 
-        let (line, reason) = err_of("ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3 4\n4 5 6\n");
+        let (line, reason) =
+            err_of("ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3 4\n4 5 6\n");
         assert_eq!(line, 6);
         assert!(reason.contains("expected ncols = 3"), "{reason}");
 
-        let (line, reason) = err_of("ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n");
+        let (line, reason) =
+            err_of("ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n");
         assert_eq!(line, 7);
         assert!(reason.contains("1 of nrows = 2"), "{reason}");
 
-        let (line, reason) = err_of("ncols 3\nnrows 1\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n4 5 6\n");
+        let (line, reason) =
+            err_of("ncols 3\nnrows 1\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2 3\n4 5 6\n");
         assert_eq!(line, 7);
         assert!(reason.contains("more rows"), "{reason}");
 
-        let (line, reason) = err_of("ncols 3\nnrows 1\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 x 3\n");
+        let (line, reason) =
+            err_of("ncols 3\nnrows 1\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 x 3\n");
         assert_eq!(line, 6);
         assert!(reason.contains("`x` in column 1"), "{reason}");
 

@@ -55,19 +55,31 @@ impl HeightField {
     /// A height field from a grid of heights.
     pub fn from_grid(grid: Grid<f64>) -> Result<Self, TerrainError> {
         if grid.nx() < 2 || grid.ny() < 2 {
-            return Err(TerrainError::TooSmall { nx: grid.nx(), ny: grid.ny() });
+            return Err(TerrainError::TooSmall {
+                nx: grid.nx(),
+                ny: grid.ny(),
+            });
         }
         let mut min_m = f64::INFINITY;
         let mut max_m = f64::NEG_INFINITY;
         for (c, &h) in grid.iter() {
             if !h.is_finite() {
-                return Err(TerrainError::NotFinite { ix: c.ix, iy: c.iy, value: h });
+                return Err(TerrainError::NotFinite {
+                    ix: c.ix,
+                    iy: c.iy,
+                    value: h,
+                });
             }
             min_m = min_m.min(h);
             max_m = max_m.max(h);
         }
         let mip = raycast::MaxMip::build(&grid);
-        Ok(Self { grid, min_m, max_m, mip })
+        Ok(Self {
+            grid,
+            min_m,
+            max_m,
+            mip,
+        })
     }
 
     /// A height field from row-major heights (`heights[iy * nx + ix]`), sample (0, 0) at
@@ -115,7 +127,10 @@ impl HeightField {
         let r = self.grid.resolution_m();
         (
             o,
-            Point2::new(o.x + (self.grid.nx() - 1) as f64 * r, o.y + (self.grid.ny() - 1) as f64 * r),
+            Point2::new(
+                o.x + (self.grid.nx() - 1) as f64 * r,
+                o.y + (self.grid.ny() - 1) as f64 * r,
+            ),
         )
     }
 
@@ -123,7 +138,11 @@ impl HeightField {
     fn patch_at(&self, x: f64, y: f64) -> (usize, usize, f64, f64) {
         let (gx, gy) = self.grid.world_to_grid(Point2::new(x, y));
         let clamp = |g: f64, n: usize| -> (usize, f64) {
-            let g = if g.is_nan() { 0.0 } else { g.clamp(0.0, (n - 1) as f64) };
+            let g = if g.is_nan() {
+                0.0
+            } else {
+                g.clamp(0.0, (n - 1) as f64)
+            };
             let i = (g.floor() as usize).min(n - 2);
             (i, g - i as f64)
         };
@@ -234,8 +253,13 @@ mod tests {
 
     fn ramp() -> HeightField {
         // h = 0.1 x + 0.2 y on a 1 m grid, 5 x 4 samples.
-        HeightField::from_grid(Grid::from_fn(Point2::new(0.0, 0.0), 1.0, 5, 4, |_, p| 0.1 * p.x + 0.2 * p.y).unwrap())
-            .unwrap()
+        HeightField::from_grid(
+            Grid::from_fn(Point2::new(0.0, 0.0), 1.0, 5, 4, |_, p| {
+                0.1 * p.x + 0.2 * p.y
+            })
+            .unwrap(),
+        )
+        .unwrap()
     }
 
     #[test]
@@ -265,9 +289,13 @@ mod tests {
 
     #[test]
     fn refuses_bad_heights() {
-        let err = HeightField::new(Point2::origin(), 1.0, 2, 2, vec![0.0, f64::NAN, 0.0, 0.0]).unwrap_err();
+        let err = HeightField::new(Point2::origin(), 1.0, 2, 2, vec![0.0, f64::NAN, 0.0, 0.0])
+            .unwrap_err();
         assert!(matches!(err, TerrainError::NotFinite { ix: 1, iy: 0, .. }));
-        assert!(matches!(HeightField::new(Point2::origin(), 1.0, 1, 2, vec![0.0, 0.0]), Err(TerrainError::TooSmall { .. })));
+        assert!(matches!(
+            HeightField::new(Point2::origin(), 1.0, 1, 2, vec![0.0, 0.0]),
+            Err(TerrainError::TooSmall { .. })
+        ));
     }
 
     #[test]

@@ -41,7 +41,10 @@ struct Level {
 impl Level {
     fn max_at(&self, cx: i64, cy: i64) -> f64 {
         // Indices are kept within [0, nx) x [0, ny) by the caller; a miss reads as "solid".
-        self.max.get((cy * self.nx + cx) as usize).copied().unwrap_or(f64::INFINITY)
+        self.max
+            .get((cy * self.nx + cx) as usize)
+            .copied()
+            .unwrap_or(f64::INFINITY)
     }
 }
 
@@ -57,7 +60,12 @@ impl MaxMip {
                 base.push(h[i].max(h[i + 1]).max(h[i + gnx]).max(h[i + gnx + 1]));
             }
         }
-        let mut levels = vec![Level { nx: nx as i64, ny: ny as i64, size: 1.0, max: base }];
+        let mut levels = vec![Level {
+            nx: nx as i64,
+            ny: ny as i64,
+            size: 1.0,
+            max: base,
+        }];
         while let Some(prev) = levels.last().filter(|l| l.nx > 1 || l.ny > 1) {
             let (pnx, pny) = (prev.nx as usize, prev.ny as usize);
             let (cx, cy) = (pnx.div_ceil(2), pny.div_ceil(2));
@@ -70,7 +78,12 @@ impl MaxMip {
                 }
             }
             let size = prev.size * 2.0;
-            levels.push(Level { nx: cx as i64, ny: cy as i64, size, max });
+            levels.push(Level {
+                nx: cx as i64,
+                ny: cy as i64,
+                size,
+                max,
+            });
         }
         Self { levels }
     }
@@ -128,14 +141,23 @@ impl HeightField {
         if t_lo.is_nan() || t_hi.is_nan() || t_lo > t_hi {
             return None;
         }
-        let ray = GridRay { g0, gd, z0: origin.z, dz: d.z };
+        let ray = GridRay {
+            g0,
+            gd,
+            z0: origin.z,
+            dz: d.z,
+        };
         let (t_hit, ix, iy) = self.march(&ray, t_lo, t_hi)?;
         let point = origin + d * t_hit;
         let (u, v) = (
             (ray.g0[0] + ray.gd[0] * t_hit - ix as f64).clamp(0.0, 1.0),
             (ray.g0[1] + ray.gd[1] * t_hit - iy as f64).clamp(0.0, 1.0),
         );
-        Some(RayHit { point, range_m: t_hit, normal: self.patch_normal(ix, iy, u, v) })
+        Some(RayHit {
+            point,
+            range_m: t_hit,
+            normal: self.patch_normal(ix, iy, u, v),
+        })
     }
 
     /// Walks the max mip-map from `t_lo` to `t_hi`; returns the ray parameter of the hit and
@@ -149,7 +171,10 @@ impl HeightField {
         let (sx, sy) = (sign_step(gdx), sign_step(gdy));
         let (inv_x, inv_y) = (1.0 / gdx, 1.0 / gdy);
         // Which face of a block the ray leaves by: the upper one when stepping up.
-        let (off_x, off_y) = (if sx > 0 { 1.0 } else { 0.0 }, if sy > 0 { 1.0 } else { 0.0 });
+        let (off_x, off_y) = (
+            if sx > 0 { 1.0 } else { 0.0 },
+            if sy > 0 { 1.0 } else { 0.0 },
+        );
         let descending = dz <= 0.0;
 
         let mut level = top;
@@ -179,14 +204,24 @@ impl HeightField {
             }
             let lv = &levels[level];
             let size = lv.size;
-            let tx = if sx != 0 { ((cx as f64 + off_x) * size - g0x) * inv_x } else { f64::INFINITY };
-            let ty = if sy != 0 { ((cy as f64 + off_y) * size - g0y) * inv_y } else { f64::INFINITY };
+            let tx = if sx != 0 {
+                ((cx as f64 + off_x) * size - g0x) * inv_x
+            } else {
+                f64::INFINITY
+            };
+            let ty = if sy != 0 {
+                ((cy as f64 + off_y) * size - g0y) * inv_y
+            } else {
+                f64::INFINITY
+            };
             let t_face = if tx <= ty { tx } else { ty };
             let t_exit = if t_face < t_hi { t_face } else { t_hi };
             let z_min = if descending { z0 + dz * t_exit } else { z_t };
             if z_min <= lv.max_at(cx, cy) {
                 if level == 0 {
-                    if let Some(hit) = self.intersect_patch(cx as usize, cy as usize, ray, t, t_exit) {
+                    if let Some(hit) =
+                        self.intersect_patch(cx as usize, cy as usize, ray, t, t_exit)
+                    {
                         return Some((hit, cx as usize, cy as usize));
                     }
                 } else {
@@ -237,7 +272,14 @@ impl HeightField {
     }
 
     /// Exact intersection of the ray with bilinear patch (ix, iy) for t in [t0, t1].
-    fn intersect_patch(&self, ix: usize, iy: usize, ray: &GridRay, t0: f64, t1: f64) -> Option<f64> {
+    fn intersect_patch(
+        &self,
+        ix: usize,
+        iy: usize,
+        ray: &GridRay,
+        t0: f64,
+        t1: f64,
+    ) -> Option<f64> {
         let [h00, h10, h01, h11] = self.corners(ix, iy);
         let (e, f, g) = (h10 - h00, h01 - h00, h00 - h10 - h01 + h11);
         let u0 = ray.g0[0] + ray.gd[0] * t0 - ix as f64;
@@ -312,7 +354,11 @@ mod tests {
             let end = origin + dn * range;
             if end.x <= 6.0 && end.y <= 11.0 {
                 let hit = hit.expect("hits the ground");
-                assert!((hit.range_m - range).abs() < 1e-9, "{deg}: {} vs {range}", hit.range_m);
+                assert!(
+                    (hit.range_m - range).abs() < 1e-9,
+                    "{deg}: {} vs {range}",
+                    hit.range_m
+                );
                 assert!(hit.point.z.abs() < 1e-9);
                 assert!((hit.normal - Vector3::z()).norm() < 1e-12);
             } else {
@@ -325,35 +371,74 @@ mod tests {
     fn hits_a_box_face_at_the_right_point() {
         // A 0.5 m box spanning y in [4, 5], x in [2, 4].
         let g = Grid::from_fn(Point2::origin(), 0.02, 301, 551, |_, p| {
-            if (2.0..=4.0).contains(&p.x) && (4.0..=5.0).contains(&p.y) { 0.5 } else { 0.0 }
+            if (2.0..=4.0).contains(&p.x) && (4.0..=5.0).contains(&p.y) {
+                0.5
+            } else {
+                0.0
+            }
         })
         .unwrap();
         let t = HeightField::from_grid(g).unwrap();
         // Horizontal ray at z = 0.25 toward +Y hits the face; the bilinear face is the ramp
         // between samples y = 3.98 (0 m) and 4.00 (0.5 m): height 0.25 at y = 3.99.
-        let hit = t.cast_ray(&Point3::new(3.0, 1.0, 0.25), &Vector3::y(), 20.0).unwrap();
+        let hit = t
+            .cast_ray(&Point3::new(3.0, 1.0, 0.25), &Vector3::y(), 20.0)
+            .unwrap();
         assert!((hit.point.y - 3.99).abs() < 1e-9, "{:?}", hit.point);
         assert!((hit.range_m - 2.99).abs() < 1e-9);
         assert!(hit.normal.y < -0.99);
         // A ray over the box lands on its top.
-        let hit = t.cast_ray(&Point3::new(3.0, 4.5, 3.0), &Vector3::new(0.0, 0.0, -1.0), 20.0).unwrap();
+        let hit = t
+            .cast_ray(
+                &Point3::new(3.0, 4.5, 3.0),
+                &Vector3::new(0.0, 0.0, -1.0),
+                20.0,
+            )
+            .unwrap();
         assert!((hit.point.z - 0.5).abs() < 1e-12 && (hit.range_m - 2.5).abs() < 1e-12);
         // A ray above everything misses.
-        assert!(t.cast_ray(&Point3::new(3.0, 1.0, 0.6), &Vector3::y(), 20.0).is_none());
+        assert!(
+            t.cast_ray(&Point3::new(3.0, 1.0, 0.6), &Vector3::y(), 20.0)
+                .is_none()
+        );
         // Short range stops before the box.
-        assert!(t.cast_ray(&Point3::new(3.0, 1.0, 0.25), &Vector3::y(), 2.0).is_none());
+        assert!(
+            t.cast_ray(&Point3::new(3.0, 1.0, 0.25), &Vector3::y(), 2.0)
+                .is_none()
+        );
     }
 
     #[test]
     fn degenerate_rays() {
         let t = flat(0.0);
-        assert!(t.cast_ray(&Point3::new(3.0, 3.0, 1.0), &Vector3::zeros(), 10.0).is_none());
-        assert!(t.cast_ray(&Point3::new(3.0, 3.0, 1.0), &Vector3::new(f64::NAN, 0.0, -1.0), 10.0).is_none());
-        assert!(t.cast_ray(&Point3::new(3.0, 3.0, 1.0), &Vector3::z(), 10.0).is_none());
-        let under = t.cast_ray(&Point3::new(3.0, 3.0, -0.5), &Vector3::y(), 10.0).unwrap();
+        assert!(
+            t.cast_ray(&Point3::new(3.0, 3.0, 1.0), &Vector3::zeros(), 10.0)
+                .is_none()
+        );
+        assert!(
+            t.cast_ray(
+                &Point3::new(3.0, 3.0, 1.0),
+                &Vector3::new(f64::NAN, 0.0, -1.0),
+                10.0
+            )
+            .is_none()
+        );
+        assert!(
+            t.cast_ray(&Point3::new(3.0, 3.0, 1.0), &Vector3::z(), 10.0)
+                .is_none()
+        );
+        let under = t
+            .cast_ray(&Point3::new(3.0, 3.0, -0.5), &Vector3::y(), 10.0)
+            .unwrap();
         assert_eq!(under.range_m, 0.0);
         // Starting outside the pit and coming in.
-        let hit = t.cast_ray(&Point3::new(-2.0, 3.0, 2.0), &Vector3::new(1.0, 0.0, -0.5), 10.0).unwrap();
+        let hit = t
+            .cast_ray(
+                &Point3::new(-2.0, 3.0, 2.0),
+                &Vector3::new(1.0, 0.0, -0.5),
+                10.0,
+            )
+            .unwrap();
         assert!((hit.point.x - 2.0).abs() < 1e-9);
     }
 

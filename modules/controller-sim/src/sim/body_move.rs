@@ -1,0 +1,251 @@
+//! `bodyMove`: propel the carriage along the rails with the foot planted (§4.2, §4.3).
+
+use std::time::Duration;
+
+use nalgebra::{Point3, Vector2};
+use rand::Rng;
+use tca_robot::{Joint, JointPosition};
+
+use super::LegSimulator;
+use super::error::{Result, SimError};
+use super::faults::happens;
+use super::report::BodyMoveReport;
+use super::trajectory::JointTrajectory;
+
+/// Gain pulling the foot's lateral (carriage X) position back onto the planted point, 1/s.
+const LATERAL_GAIN_PER_S: f64 = 2.0;
+/// Upper bound on control cycles of one body move (a stall guard: 2 hours at 60 Hz).
+const MAX_CYCLES: usize = 432_000;
+
+/// A fault drawn for this body move, striking when the carriage has covered a fraction of
+/// the distance.
+#[derive(Clone, Copy)]
+struct Planned {
+    slip_at: Option<f64>,
+    drop_at: Option<f64>,
+    trip_at: Option<(f64, Joint)>,
+}
+
+impl LegSimulator {
+    /// `bodyMove`: propels the carriage to world `target_y_m` with the foot planted.
+    ///
+    /// The foot is first pressed to the compression force (800 lb) and relieved to the
+    /// traction force (500 lb). Then, at the control rate (~60 Hz), the carriage speed is a
+    /// clipped linear function of the position error; the shoulder and elbow rates come from
+    /// the inverse Jacobian (scaled down to the joint speed limits) and the foot stays put in
+    /// the world. The move ends within `position_tolerance_m` of the target; then the strain
+    /// left in the leg by compliance is relieved by moving the joints onto the foot's real
+    /// position (§4.2, §7.1 item 4). It fails with [`SimError::ExtensionLimit`] (saying how far
+    /// it got) before a joint passes its limits or the leg reaches full extension. A target
+    /// beyond the rails, or a foot in the air, is refused and nothing moves.
+    pub fn body_move(&mut self, target_y_m: f64) -> Result<BodyMoveReport> {
+        if !target_y_m.is_finite() {
+            return Err(SimError::NotFinite {
+                what: format!("body move target y = {target_y_m}"),
+            });
+        }
+        let rails = self.params.rails;
+        if target_y_m < rails.y_min_m || target_y_m > rails.y_max_m {
+            return Err(SimError::BeyondRails {
+                target_y_m,
+                min_y_m: rails.y_min_m,
+                max_y_m: rails.y_max_m,
+            });
+        }
+        let Some(mut foot) = self.planted else {
+            return Err(SimError::FootNotPlanted);
+        };
+        let faults = self.faults;
+        let planned = Planned {
+            slip_at: happens(&mut self.rng, faults.slip_probability)
+                .then(|| self.rng.random_range(0.1..0.9)),
+            drop_at: happens(&mut self.rng, faults.force_drop_probability)
+                .then(|| self.rng.random_range(0.1..0.9)),
+            trip_at: happens(&mut self.rng, faults.limit_switch_probability).then(|| {
+                (
+                    self.rng.random_range(0.0..1.0),
+                    Joint::ALL[self.rng.random_range(0..3)],
+                )
+            }),
+        };
+        let bm = self.params.body_move;
+        let start_y = self.carriage.y_m;
+        tracing::debug!(start_y, target_y_m, "bodyMove");
+
+        // 1. Compress the ground, then relieve to the traction force.
+        let mut elapsed = 0.0;
+        let compressed = self.vertical_for_force(&self.joints, &foot, bm.compress_force_n);
+        if compressed > self.kin.limits(Joint::Vertical).max {
+            return Err(SimError::ExtensionLimit {
+                reached_y_m: start_y,
+                target_y_m,
+                joint: Joint::Vertical,
+            });
+        }
+        elapsed += self.vertical_move_s(compressed);
+        self.joints.vertical_m = compressed;
+        let traction = self.vertical_for_force(&self.joints, &foot, bm.traction_force_n);
+        elapsed += self.vertical_move_s(traction);
+        self.joints.vertical_m = traction;
+
+        // 2. Propel.
+        let dt = 1.0 / bm.control_rate_hz;
+        let distance = (target_y_m - start_y).abs().max(1e-9);
+        let scale = faults.compliance_scale;
+        let lateral = self.params.compliance.lateral_m_per_n;
+        let friction = self.params.rails.friction_n;
+        let vertical_max = self.kin.limits(Joint::Vertical).max;
+        let carriage_x = self.kin.carriage().x_m;
+        let mut q = self.joints;
+        let mut y = start_y;
+        let mut slip_left = 0.0;
+        let mut slid = 0.0;
+        let mut cycles = 0usize;
+        let outcome: Result<()> = loop {
+            let error = target_y_m - y;
+            if error.abs() <= bm.position_tolerance_m {
+                break Ok(());
+            }
+            if cycles >= MAX_CYCLES {
+                break Err(SimError::ExtensionLimit {
+                    reached_y_m: y,
+                    target_y_m,
+                    joint: Joint::Elbow,
+                });
+            }
+            let speed = (bm.gain_per_s * error).clamp(-bm.max_speed_m_per_s, bm.max_speed_m_per_s);
+            let fk = self.kin.forward(&q);
+            let foot_x_rel = foot.x - carriage_x;
+            let wanted = Vector2::new(LATERAL_GAIN_PER_S * (foot_x_rel - fk.x), -speed);
+            let Ok(mut rates) = self.kin.joint_rates_for(&q, &wanted) else {
+                break Err(SimError::ExtensionLimit {
+                    reached_y_m: y,
+                    target_y_m,
+                    joint: Joint::Elbow,
+                });
+            };
+            let limit = |j: Joint| self.kin.limits(j).max_speed;
+            let over =
+                (rates.x.abs() / limit(Joint::Shoulder)).max(rates.y.abs() / limit(Joint::Elbow));
+            if over > 1.0 {
+                rates /= over;
+            }
+            let mut next = q;
+            next.shoulder_rad += rates.x * dt;
+            next.elbow_rad += rates.y * dt;
+            // The force servo keeps the traction force on the foot.
+            next.vertical_m = self.vertical_for_force(&next, &foot, bm.traction_force_n);
+            if let Some(joint) = self.leaves_safe_range(&next) {
+                break Err(SimError::ExtensionLimit {
+                    reached_y_m: y,
+                    target_y_m,
+                    joint,
+                });
+            }
+            // The real foot is pinned; the joints overshoot it by the compliance under the
+            // friction load, and the carriage goes where the pinned foot puts it.
+            let overshoot_y =
+                -scale * (next.vertical_m / vertical_max) * lateral * friction * speed.signum();
+            let next_fk_y = self.kin.forward(&next).y;
+            let step = (fk.y - next_fk_y).abs();
+            if slip_left > 0.0 {
+                let s = step.min(slip_left);
+                foot.y -= s * speed.signum();
+                slip_left -= s;
+                slid += s;
+            }
+            q = next;
+            y = foot.y - (next_fk_y - overshoot_y);
+            self.lateral_force_n = [0.0, friction * speed.signum()];
+            cycles += 1;
+            elapsed += dt;
+            let progress = (y - start_y).abs() / distance;
+            if let Some((at, joint)) = planned.trip_at
+                && progress >= at
+            {
+                break Err(SimError::LimitSwitch {
+                    joint,
+                    position: q.get(joint),
+                });
+            }
+            if planned.drop_at.is_some_and(|at| progress >= at) {
+                let before = bm.traction_force_n;
+                q.vertical_m = self.vertical_for_force(&q, &foot, 0.0);
+                self.lateral_force_n = [0.0; 2];
+                break Err(SimError::ForceDropOff {
+                    carriage_y_m: y,
+                    force_before_n: before,
+                    force_after_n: 0.0,
+                });
+            }
+            if let Some(at) = planned.slip_at
+                && progress >= at
+                && slid == 0.0
+                && slip_left == 0.0
+            {
+                slip_left = faults.slip_distance_m;
+            }
+            if slid >= bm.slip_detect_m {
+                break Err(SimError::Slip {
+                    slid_m: slid,
+                    carriage_y_m: y,
+                });
+            }
+        };
+        self.joints = q;
+        self.planted = Some(foot);
+        self.carriage.y_m = y;
+        if let Err(error) = outcome {
+            self.clock += Duration::from_secs_f64(elapsed);
+            tracing::debug!(%error, "bodyMove stopped");
+            return Err(error);
+        }
+
+        // 3. Relieve the strain: put the joints where the rigid kinematics match the foot.
+        let fk = self.kin.forward(&q);
+        let real = self.carriage.to_carriage(self.kin.carriage(), &foot);
+        let strain = ((fk.x - real.x).powi(2) + (fk.y - real.y).powi(2)).sqrt();
+        if let Ok(mut relieved) = self
+            .kin
+            .inverse_nearest(&Point3::new(real.x, real.y, fk.z), &q)
+        {
+            relieved.vertical_m = self.vertical_for_force(&relieved, &foot, bm.traction_force_n);
+            elapsed += JointTrajectory::plan(&self.kin, &q, &[relieved]).duration_s();
+            self.joints = relieved;
+        }
+        self.lateral_force_n = [0.0; 2];
+        self.clock += Duration::from_secs_f64(elapsed);
+        Ok(BodyMoveReport {
+            duration: Duration::from_secs_f64(elapsed),
+            start_y_m: start_y,
+            final_y_m: y,
+            strain_relieved_m: strain,
+            control_cycles: cycles,
+        })
+    }
+
+    /// Vertical extension that presses a foot pinned at `foot` with `force_n`, the
+    /// shoulder and elbow as in `q`.
+    fn vertical_for_force(&self, q: &JointPosition, foot: &Point3<f64>, force_n: f64) -> f64 {
+        let free_z = self.free_foot(q).z;
+        // Extending the vertical axis lowers the free foot one for one.
+        q.vertical_m + (free_z - foot.z) + force_n / self.params.contact.stiffness_n_per_m
+    }
+
+    /// Time of a pure vertical move of the leg to `vertical_m`, seconds.
+    fn vertical_move_s(&self, vertical_m: f64) -> f64 {
+        let mut target = self.joints;
+        target.vertical_m = vertical_m;
+        JointTrajectory::plan(&self.kin, &self.joints, &[target]).duration_s()
+    }
+
+    /// The first joint outside its soft limits, or the elbow too close to straight.
+    fn leaves_safe_range(&self, q: &JointPosition) -> Option<Joint> {
+        for joint in Joint::ALL {
+            if !self.kin.limits(joint).contains(q.get(joint)) {
+                return Some(joint);
+            }
+        }
+        (q.elbow_rad.abs() < self.params.body_move.min_abs_elbow_rad).then_some(Joint::Elbow)
+    }
+}
