@@ -23,7 +23,7 @@ pub mod zenoh_transport;
 pub use config::CentralConfig;
 pub use core::{Action, Central, Event, LinkId};
 pub use inproc::InProcLink;
-pub use runtime::{CentralHandle, RunningCentral, Stats, start};
+pub use runtime::{CentralHandle, RunningCentral, StartOptions, Stats, start};
 
 /// Errors of central's runtime.
 #[derive(Debug, thiserror::Error)]

@@ -151,7 +151,10 @@ impl Central {
                 let view = self.registry_view();
                 self.reply_control(link, &envelope, &view, out);
             }
-            names::BYE => self.bye(link, out),
+            names::BYE => {
+                self.reply_control(link, &envelope, &(), out);
+                self.bye(link, out);
+            }
             names::TREE => {
                 let view = TreeView {
                     text: self.tree.render(),

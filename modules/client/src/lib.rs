@@ -1,1 +1,50 @@
-//! TCA module library: connect to central, register handlers, send messages.
+//! The TCA module library: what a module links to connect to central, register the messages
+//! it handles and talk to the rest of the system (§3.2 of the report).
+//!
+//! ```no_run
+//! use serde::{Deserialize, Serialize};
+//! use tca_module::{Connector, Module};
+//!
+//! /// The carriage position on the rails, in metres.
+//! #[derive(Serialize, Deserialize)]
+//! pub struct BodyPosition;
+//! #[derive(Serialize, Deserialize)]
+//! pub struct Pose { pub y_m: f64 }
+//! tca_messages::message!(BodyPosition: query "bodyPosition" -> Pose);
+//!
+//! # async fn run(connector: Connector) -> Result<(), tca_module::ModuleError> {
+//! // A module that answers the query...
+//! let _controller = Module::builder("controller")
+//!     .handle(|_ctx, _q: BodyPosition| async { Ok(Pose { y_m: 1.5 }) })
+//!     .connect(&connector)
+//!     .await?;
+//! // ...and one that asks it, through central.
+//! let gait = Module::builder("gait").connect(&connector).await?;
+//! let pose = gait.query(&BodyPosition).await?;
+//! assert_eq!(pose.y_m, 1.5);
+//! # Ok(()) }
+//! ```
+//!
+//! # Layout
+//!
+//! - [`builder`]: [`ModuleBuilder`]: name, capacity, handlers, `connect`.
+//! - [`module`]: [`Module`], the connected handle: `query`, `goal`, `command`, `inform`,
+//!   registry and tree inspection, kill and constraints; the receive loop that runs handlers.
+//! - [`context`]: [`Context`], what a handler gets: sends attach to the handler's task node.
+//! - [`connector`]: [`Connector`]: in-process or zenoh.
+//! - `handler`: type erasure of handlers.
+//! - [`error`]: [`ModuleError`] and [`HandlerError`].
+
+pub mod builder;
+pub mod connector;
+pub mod context;
+pub mod error;
+mod handler;
+pub mod module;
+
+pub use builder::ModuleBuilder;
+pub use connector::Connector;
+pub use context::Context;
+pub use error::{HandlerError, ModuleError, Result};
+pub use module::{DEFAULT_QUERY_TIMEOUT, Module, Task};
+pub use tca_messages::{self as messages, ConstraintSpec, SendOptions, TaskRef};

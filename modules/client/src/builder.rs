@@ -1,0 +1,232 @@
+//! Building a module: its name, capacity and handlers, then connecting.
+
+use std::collections::HashMap;
+use std::future::Future;
+use std::time::Duration;
+
+use tca_messages::control::{Hello, Register, RegisterOutcome, Welcome, names};
+use tca_messages::{
+    Class, DEFAULT_MAX_FRAME_BYTES, Envelope, Message, MessageId, MessageName, ModuleName,
+    RouteError, SendOptions, decode, decode_data, encode, encode_data, now_ns,
+};
+
+use crate::connector::Connector;
+use crate::context::Context;
+use crate::error::{HandlerError, ModuleError, Result};
+use crate::handler::{HandlerEntry, erase};
+use crate::module::{DEFAULT_QUERY_TIMEOUT, Module};
+
+/// How long connecting waits for central's welcome and registration answer.
+pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// Builds a module. See the crate documentation for an example.
+pub struct ModuleBuilder {
+    name: String,
+    capacity: u32,
+    query_timeout: Duration,
+    max_frame_bytes: usize,
+    replace: bool,
+    handlers: HashMap<MessageName, HandlerEntry>,
+    error: Option<ModuleError>,
+}
+
+impl Module {
+    /// Starts building a module named `name`.
+    pub fn builder(name: impl Into<String>) -> ModuleBuilder {
+        ModuleBuilder {
+            name: name.into(),
+            capacity: 1,
+            query_timeout: DEFAULT_QUERY_TIMEOUT,
+            max_frame_bytes: DEFAULT_MAX_FRAME_BYTES,
+            replace: false,
+            handlers: HashMap::new(),
+            error: None,
+        }
+    }
+}
+
+impl ModuleBuilder {
+    /// How many goals/commands central may give this module at once (default 1, TCA's
+    /// resource management). Queries and informs are not counted.
+    pub fn capacity(mut self, capacity: u32) -> Self {
+        self.capacity = capacity.max(1);
+        self
+    }
+
+    /// How long queries wait for their answer (default 30 s).
+    pub fn query_timeout(mut self, timeout: Duration) -> Self {
+        self.query_timeout = timeout;
+        self
+    }
+
+    /// Largest frame this module sends.
+    pub fn max_frame_bytes(mut self, bytes: usize) -> Self {
+        self.max_frame_bytes = bytes;
+        self
+    }
+
+    /// Take over the messages this module registers from any module that registered them
+    /// before (swapping implementations, e.g. the simulator for the real controller).
+    pub fn replace(mut self, replace: bool) -> Self {
+        self.replace = replace;
+        for entry in self.handlers.values_mut() {
+            entry.registration.replace = replace;
+        }
+        self
+    }
+
+    /// Registers the handler of message type `M` (a query, goal, command, inform or
+    /// exception). For queries the handler returns the reply; for the others `()`.
+    pub fn handle<M, F, Fut>(mut self, handler: F) -> Self
+    where
+        M: Message,
+        F: Fn(Context, M) -> Fut + Send + Sync + 'static,
+        Fut: Future<Output = Result<M::Reply, HandlerError>> + Send + 'static,
+    {
+        match erase::<M, F, Fut>(handler, self.replace) {
+            Ok((name, entry)) => {
+                if self.handlers.insert(name.clone(), entry).is_some() && self.error.is_none() {
+                    self.error = Some(ModuleError::Usage(format!(
+                        "two handlers for {name} in module {}",
+                        self.name
+                    )));
+                }
+            }
+            Err(e) => {
+                if self.error.is_none() {
+                    self.error = Some(e);
+                }
+            }
+        }
+        self
+    }
+
+    /// Connects to central, says hello, registers every handler and starts serving.
+    pub async fn connect(self, connector: &Connector) -> Result<Module> {
+        if let Some(e) = self.error {
+            return Err(e);
+        }
+        let name =
+            ModuleName::new(self.name.clone()).map_err(|e| ModuleError::Usage(e.to_string()))?;
+        let mut link = connector.open().await?;
+        // Hello, before the link number is known: id 0.0.
+        let hello = Hello {
+            module: name.clone(),
+            capacity: self.capacity,
+            pid: std::process::id(),
+            host: hostname(),
+        };
+        let hello_env = bootstrap(
+            &name,
+            names::HELLO,
+            MessageId::new(0, 0),
+            encode_data(&hello)?,
+        )?;
+        link.tx.send(encode(&hello_env)?.into())?;
+        let answer = next_answer(&mut link.rx, hello_env.id, connector).await?;
+        let welcome: Welcome = match answer.class {
+            Class::Control => decode_data(&answer.data)?,
+            _ => {
+                let reason = decode_data::<RouteError>(&answer.data)
+                    .map(|e| e.to_string())
+                    .unwrap_or_else(|e| e.to_string());
+                return Err(ModuleError::Refused {
+                    module: name.to_string(),
+                    reason,
+                });
+            }
+        };
+        // Register every handler.
+        let register = Register {
+            entries: self
+                .handlers
+                .values()
+                .map(|h| h.registration.clone())
+                .collect(),
+        };
+        let reg_id = MessageId::new(welcome.link, 1);
+        let reg_env = bootstrap(&name, names::REGISTER, reg_id, encode_data(&register)?)?;
+        link.tx.send(encode(&reg_env)?.into())?;
+        let answer = next_answer(&mut link.rx, reg_id, connector).await?;
+        if answer.class != Class::Reply {
+            let reason = decode_data::<RouteError>(&answer.data)
+                .map(|e| e.to_string())
+                .unwrap_or_else(|e| e.to_string());
+            return Err(ModuleError::Registration(vec![reason]));
+        }
+        let outcome: RegisterOutcome = decode_data(&answer.data)?;
+        if !outcome.refused.is_empty() {
+            return Err(ModuleError::Registration(
+                outcome
+                    .refused
+                    .into_iter()
+                    .map(|(n, r)| format!("{n}: {r}"))
+                    .collect(),
+            ));
+        }
+        tracing::info!(module = %name, link = welcome.link, handlers = self.handlers.len(), "connected to {}", connector.describe());
+        let module = Module::new(
+            name,
+            welcome.link,
+            2,
+            link.tx,
+            self.handlers,
+            self.query_timeout,
+            self.max_frame_bytes,
+            link.keep,
+        );
+        tokio::spawn(Module::receive_loop(
+            std::sync::Arc::downgrade(&module.shared),
+            link.rx,
+        ));
+        Ok(module)
+    }
+}
+
+fn bootstrap(name: &ModuleName, control: &str, id: MessageId, data: Vec<u8>) -> Result<Envelope> {
+    Ok(Envelope {
+        id,
+        class: Class::Control,
+        name: MessageName::new(control).map_err(|e| ModuleError::Usage(e.to_string()))?,
+        sender: name.clone(),
+        context: None,
+        node: None,
+        correlation: None,
+        timestamp_ns: now_ns(),
+        options: SendOptions::default(),
+        redelivery: 0,
+        data,
+    })
+}
+
+/// Waits for central's answer to a bootstrap message.
+async fn next_answer(
+    rx: &mut tokio::sync::mpsc::UnboundedReceiver<bytes::Bytes>,
+    id: MessageId,
+    connector: &Connector,
+) -> Result<Envelope> {
+    let deadline = tokio::time::Instant::now() + CONNECT_TIMEOUT;
+    loop {
+        let frame = tokio::time::timeout_at(deadline, rx.recv())
+            .await
+            .map_err(|_| {
+                ModuleError::Connect(format!(
+                    "{} did not answer within {CONNECT_TIMEOUT:?}",
+                    connector.describe()
+                ))
+            })?
+            .ok_or(ModuleError::Disconnected)?;
+        let envelope = decode(&frame, usize::MAX)?;
+        if envelope.correlation == Some(id) {
+            return Ok(envelope);
+        }
+    }
+}
+
+fn hostname() -> String {
+    std::env::var("HOSTNAME")
+        .ok()
+        .or_else(|| std::fs::read_to_string("/etc/hostname").ok())
+        .map(|h| h.trim().to_owned())
+        .unwrap_or_else(|| "unknown".into())
+}

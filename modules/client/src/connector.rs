@@ -1,0 +1,141 @@
+//! Opening a link to central: in-process channels or a zenoh client session.
+
+use std::sync::Arc;
+
+use bytes::Bytes;
+use tca_central::CentralHandle;
+use tca_central::inproc::InProcSender;
+use tca_central::zenoh_transport::{alive_key, client_config, down_key, up_key};
+use tokio::sync::mpsc;
+use zenoh::qos::CongestionControl;
+
+use crate::error::{ModuleError, Result};
+
+/// How a module reaches central. The same module code runs on either.
+#[derive(Clone, Debug)]
+pub enum Connector {
+    /// Central runs in this process (the embedded default).
+    InProcess(CentralHandle),
+    /// Central is reached over zenoh at these endpoints (e.g. `tcp/127.0.0.1:7447`).
+    Zenoh(Vec<String>),
+}
+
+impl Connector {
+    /// A zenoh connector for one endpoint.
+    pub fn zenoh(endpoint: impl Into<String>) -> Self {
+        Connector::Zenoh(vec![endpoint.into()])
+    }
+
+    /// Describes where it connects, for messages.
+    pub fn describe(&self) -> String {
+        match self {
+            Connector::InProcess(_) => "in-process central".into(),
+            Connector::Zenoh(e) => format!("central over zenoh at {}", e.join(", ")),
+        }
+    }
+
+    pub(crate) async fn open(&self) -> Result<Link> {
+        match self {
+            Connector::InProcess(handle) => {
+                let mut link = handle
+                    .connect_in_process()
+                    .map_err(|e| ModuleError::Connect(e.to_string()))?;
+                let rx = link
+                    .take_receiver()
+                    .ok_or_else(|| ModuleError::Connect("link receiver already taken".into()))?;
+                let tx = FrameTx::InProc(link.sender());
+                Ok(Link {
+                    tx,
+                    rx,
+                    keep: Keep::InProc(Arc::new(link)),
+                })
+            }
+            Connector::Zenoh(endpoints) => open_zenoh(endpoints).await,
+        }
+    }
+}
+
+/// Sends frames to central.
+#[derive(Clone, Debug)]
+pub(crate) enum FrameTx {
+    InProc(InProcSender),
+    Zenoh(mpsc::UnboundedSender<Bytes>),
+}
+
+impl FrameTx {
+    pub(crate) fn send(&self, frame: Bytes) -> Result<()> {
+        match self {
+            FrameTx::InProc(s) => s.send(frame).map_err(|_| ModuleError::Disconnected),
+            FrameTx::Zenoh(s) => s.send(frame).map_err(|_| ModuleError::Disconnected),
+        }
+    }
+}
+
+/// What keeps a link open; dropping it closes the link.
+#[allow(dead_code)]
+pub(crate) enum Keep {
+    InProc(Arc<tca_central::InProcLink>),
+    Zenoh(ZenohLink),
+}
+
+/// A zenoh client link's resources.
+#[allow(dead_code)]
+pub(crate) struct ZenohLink {
+    session: zenoh::Session,
+    subscriber: zenoh::pubsub::Subscriber<()>,
+    token: zenoh::liveliness::LivelinessToken,
+}
+
+/// An open link.
+pub(crate) struct Link {
+    pub(crate) tx: FrameTx,
+    pub(crate) rx: mpsc::UnboundedReceiver<Bytes>,
+    pub(crate) keep: Keep,
+}
+
+async fn open_zenoh(endpoints: &[String]) -> Result<Link> {
+    let config = client_config(endpoints).map_err(|e| ModuleError::Connect(e.to_string()))?;
+    let session = zenoh::open(config).await.map_err(|e| {
+        ModuleError::Connect(format!(
+            "no central at {}: {e}; start one with `tca central --listen ENDPOINT`",
+            endpoints.join(", ")
+        ))
+    })?;
+    let zid = session.zid().to_string();
+    let (in_tx, rx) = mpsc::unbounded_channel();
+    let subscriber = session
+        .declare_subscriber(down_key(&zid))
+        .callback(move |sample| {
+            let _ = in_tx.send(Bytes::from(sample.payload().to_bytes().into_owned()));
+        })
+        .await
+        .map_err(|e| ModuleError::Connect(e.to_string()))?;
+    let publisher = session
+        .declare_publisher(up_key(&zid))
+        .congestion_control(CongestionControl::Block)
+        .express(true)
+        .await
+        .map_err(|e| ModuleError::Connect(e.to_string()))?;
+    let token = session
+        .liveliness()
+        .declare_token(alive_key(&zid))
+        .await
+        .map_err(|e| ModuleError::Connect(e.to_string()))?;
+    let (out_tx, mut out_rx) = mpsc::unbounded_channel::<Bytes>();
+    tokio::spawn(async move {
+        while let Some(frame) = out_rx.recv().await {
+            if let Err(e) = publisher.put(frame).await {
+                tracing::warn!(error = %e, "publishing to central failed");
+            }
+        }
+    });
+    Ok(Link {
+        tx: FrameTx::Zenoh(out_tx),
+        rx,
+        keep: Keep::Zenoh(ZenohLink {
+            session,
+            subscriber,
+            token,
+        }),
+    })
+}

@@ -1,0 +1,63 @@
+//! Handlers, erased to one shape: postcard data in, postcard reply (or failure) out.
+
+use std::future::Future;
+use std::pin::Pin;
+use std::sync::Arc;
+
+use tca_messages::control::Registration;
+use tca_messages::{Message, MessageName, decode_data, encode_data};
+
+use crate::context::Context;
+use crate::error::{HandlerError, ModuleError, Result};
+
+/// A boxed handler future.
+pub(crate) type HandlerFuture = Pin<Box<dyn Future<Output = Result<Vec<u8>, HandlerError>> + Send>>;
+
+/// A handler of one message name.
+pub(crate) type ErasedHandler = Arc<dyn Fn(Context, Vec<u8>) -> HandlerFuture + Send + Sync>;
+
+/// A registered handler with what central must know about it.
+#[derive(Clone)]
+pub(crate) struct HandlerEntry {
+    pub(crate) registration: Registration,
+    pub(crate) call: ErasedHandler,
+}
+
+/// Wraps a typed handler.
+pub(crate) fn erase<M, F, Fut>(f: F, replace: bool) -> Result<(MessageName, HandlerEntry)>
+where
+    M: Message,
+    F: Fn(Context, M) -> Fut + Send + Sync + 'static,
+    Fut: Future<Output = Result<M::Reply, HandlerError>> + Send + 'static,
+{
+    if !M::CLASS.is_handled() {
+        return Err(ModuleError::Usage(format!(
+            "{} is declared as a {}; only queries, goals, commands, informs and exceptions have handlers",
+            M::NAME,
+            M::CLASS
+        )));
+    }
+    let name = MessageName::new(M::NAME).map_err(|e| ModuleError::Usage(e.to_string()))?;
+    let registration = Registration {
+        name: name.clone(),
+        class: M::CLASS,
+        format: M::format()?,
+        reply: M::reply_format()?,
+        replace,
+    };
+    let f = Arc::new(f);
+    let call: ErasedHandler = Arc::new(move |ctx: Context, data: Vec<u8>| {
+        let f = f.clone();
+        Box::pin(async move {
+            let message: M = decode_data(&data).map_err(|e| {
+                HandlerError::new(format!(
+                    "data of {} does not decode as this module's type: {e}",
+                    M::NAME
+                ))
+            })?;
+            let reply = f(ctx, message).await?;
+            encode_data(&reply).map_err(|e| HandlerError::new(e.to_string()))
+        }) as HandlerFuture
+    });
+    Ok((name, HandlerEntry { registration, call }))
+}

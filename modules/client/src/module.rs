@@ -1,0 +1,509 @@
+//! A connected module: sending messages and running handlers.
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use bytes::Bytes;
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use tca_messages::control::{
+    Cancel, Constrain, Kill, Registry, TaskEnded, TaskOutcome, TreeView, names,
+};
+use tca_messages::{
+    Class, ConstraintSpec, Envelope, Failure, Message, MessageId, MessageName, ModuleName, NodeId,
+    RouteError, SendOptions, TaskRef, decode, decode_data, encode, encode_data, now_ns,
+};
+use tokio::sync::{mpsc, oneshot};
+use tokio::task::AbortHandle;
+
+use crate::connector::FrameTx;
+use crate::context::Context;
+use crate::error::{ModuleError, Result};
+use crate::handler::HandlerEntry;
+
+/// How long a query waits for its answer unless told otherwise.
+pub const DEFAULT_QUERY_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// State shared by every handle to one connected module.
+pub(crate) struct Shared {
+    pub(crate) name: ModuleName,
+    pub(crate) link_no: u32,
+    seq: AtomicU32,
+    tx: FrameTx,
+    max_frame_bytes: usize,
+    pending: Mutex<HashMap<MessageId, oneshot::Sender<Envelope>>>,
+    watchers: Mutex<HashMap<MessageId, oneshot::Sender<Result<TaskOutcome>>>>,
+    running: Mutex<HashMap<NodeId, AbortHandle>>,
+    handlers: HashMap<MessageName, HandlerEntry>,
+    pub(crate) query_timeout: Duration,
+    closed: AtomicBool,
+    closed_signal: tokio::sync::watch::Sender<bool>,
+    /// Keeps the transport open while any handle lives.
+    _keep: crate::connector::Keep,
+}
+
+/// A module connected to central. Cheap to clone; the connection closes when the last clone
+/// (and every running handler) is gone, or on [`Module::close`].
+#[derive(Clone)]
+pub struct Module {
+    pub(crate) shared: Arc<Shared>,
+    /// The task node messages sent through this handle are attached to.
+    pub(crate) context: Option<NodeId>,
+}
+
+impl std::fmt::Debug for Module {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Module")
+            .field("name", &self.shared.name)
+            .field("context", &self.context)
+            .finish()
+    }
+}
+
+/// A goal or command that was sent.
+#[derive(Debug)]
+pub struct Task {
+    id: MessageId,
+    outcome: Option<oneshot::Receiver<Result<TaskOutcome>>>,
+}
+
+impl Task {
+    /// The id of the message that created the task.
+    pub fn id(&self) -> MessageId {
+        self.id
+    }
+
+    /// A reference to the task for temporal constraints of later sends.
+    pub fn task_ref(&self) -> TaskRef {
+        TaskRef::Message(self.id)
+    }
+
+    /// Waits until the task is achieved, fails or is killed. Only for tasks sent with
+    /// `notify` (see [`Module::send_task`]); others return an error at once.
+    pub async fn outcome(self) -> Result<TaskOutcome> {
+        match self.outcome {
+            Some(rx) => rx.await.map_err(|_| ModuleError::Disconnected)?,
+            None => Err(ModuleError::Usage(
+                "this task was sent without notify; send it with SendOptions { notify: true, .. }"
+                    .into(),
+            )),
+        }
+    }
+}
+
+impl Module {
+    pub(crate) fn new(
+        name: ModuleName,
+        link_no: u32,
+        first_seq: u32,
+        tx: FrameTx,
+        handlers: HashMap<MessageName, HandlerEntry>,
+        query_timeout: Duration,
+        max_frame_bytes: usize,
+        keep: crate::connector::Keep,
+    ) -> Self {
+        Module {
+            shared: Arc::new(Shared {
+                name,
+                link_no,
+                seq: AtomicU32::new(first_seq),
+                tx,
+                max_frame_bytes,
+                pending: Mutex::new(HashMap::new()),
+                watchers: Mutex::new(HashMap::new()),
+                running: Mutex::new(HashMap::new()),
+                handlers,
+                query_timeout,
+                closed: AtomicBool::new(false),
+                closed_signal: tokio::sync::watch::channel(false).0,
+                _keep: keep,
+            }),
+            context: None,
+        }
+    }
+
+    /// The module's name.
+    pub fn name(&self) -> &ModuleName {
+        &self.shared.name
+    }
+
+    /// The task node this handle sends in the context of, if any.
+    pub fn context(&self) -> Option<NodeId> {
+        self.context
+    }
+
+    /// A handle that sends in the context of `node` (its goals and commands become children).
+    pub fn in_context(&self, node: Option<NodeId>) -> Module {
+        Module {
+            shared: self.shared.clone(),
+            context: node,
+        }
+    }
+
+    /// Sends a query and waits for the reply (at most the module's query timeout).
+    pub async fn query<Q: Message>(&self, query: &Q) -> Result<Q::Reply> {
+        self.query_with_timeout(query, self.shared.query_timeout)
+            .await
+    }
+
+    /// Sends a query and waits at most `timeout` for the reply.
+    pub async fn query_with_timeout<Q: Message>(
+        &self,
+        query: &Q,
+        timeout: Duration,
+    ) -> Result<Q::Reply> {
+        expect_class::<Q>(Class::Query)?;
+        let envelope = self.envelope(Class::Query, Q::NAME, encode_data(query)?, None)?;
+        let answer = self.request(envelope, timeout).await?;
+        match answer.class {
+            Class::Reply => Ok(decode_data(&answer.data)?),
+            Class::Failure => Err(ModuleError::HandlerFailed {
+                name: Q::NAME.into(),
+                reason: decode_data::<Failure>(&answer.data)
+                    .map(|f| f.reason)
+                    .unwrap_or_else(|e| e.to_string()),
+            }),
+            _ => Err(route_error(&answer)),
+        }
+    }
+
+    /// Sends a goal (non-blocking): it becomes a task-tree node under this handle's context.
+    pub fn goal<G: Message>(&self, goal: &G) -> Result<Task> {
+        expect_class::<G>(Class::Goal)?;
+        self.send_task(goal, SendOptions::default())
+    }
+
+    /// Sends a command (non-blocking).
+    pub fn command<C: Message>(&self, command: &C) -> Result<Task> {
+        expect_class::<C>(Class::Command)?;
+        self.send_task(command, SendOptions::default())
+    }
+
+    /// Sends a goal or command with temporal constraints and/or a request to be told how it
+    /// ends.
+    pub fn send_task<M: Message>(&self, message: &M, options: SendOptions) -> Result<Task> {
+        if !M::CLASS.is_task() {
+            return Err(ModuleError::Usage(format!(
+                "{} is a {}, not a goal or command",
+                M::NAME,
+                M::CLASS
+            )));
+        }
+        let notify = options.notify;
+        let envelope = self.envelope(M::CLASS, M::NAME, encode_data(message)?, Some(options))?;
+        let id = envelope.id;
+        let outcome = if notify {
+            let (tx, rx) = oneshot::channel();
+            lock(&self.shared.watchers).insert(id, tx);
+            Some(rx)
+        } else {
+            None
+        };
+        self.transmit(&envelope)?;
+        Ok(Task { id, outcome })
+    }
+
+    /// Sends an inform (one-way).
+    pub fn inform<I: Message>(&self, inform: &I) -> Result<()> {
+        expect_class::<I>(Class::Inform)?;
+        let envelope = self.envelope(Class::Inform, I::NAME, encode_data(inform)?, None)?;
+        self.transmit(&envelope)
+    }
+
+    /// The registry of every registered message.
+    pub async fn registry(&self) -> Result<Registry> {
+        self.control(names::REGISTRY, &()).await
+    }
+
+    /// The live task trees, as text.
+    pub async fn tree(&self) -> Result<TreeView> {
+        self.control(names::TREE, &()).await
+    }
+
+    /// Kills a node and its subtree.
+    pub async fn kill(&self, node: NodeId) -> Result<()> {
+        self.control(names::KILL, &Kill { node }).await
+    }
+
+    /// Adds a temporal constraint between existing tasks.
+    pub async fn constrain(&self, constraint: ConstraintSpec) -> Result<()> {
+        self.control(names::CONSTRAIN, &Constrain { constraint })
+            .await
+    }
+
+    /// Says goodbye to central and waits (at most 2 s) for it to acknowledge, so nothing sent
+    /// before is lost; later sends fail with [`ModuleError::Disconnected`].
+    pub async fn close(&self) {
+        if let Ok(env) = self.envelope(
+            Class::Control,
+            names::BYE,
+            encode_data(&()).unwrap_or_default(),
+            None,
+        ) {
+            let _ = self.request(env, Duration::from_secs(2)).await;
+        }
+        self.shared.closed.store(true, Ordering::Relaxed);
+        self.shared.closed_signal.send_replace(true);
+    }
+
+    /// Resolves when the link to central closes (central stopped, or it closed the link).
+    pub async fn closed(&self) {
+        let mut closed = self.shared.closed_signal.subscribe();
+        let _ = closed.wait_for(|c| *c).await;
+    }
+
+    /// Whether the link to central is closed.
+    pub fn is_closed(&self) -> bool {
+        self.shared.closed.load(Ordering::Relaxed)
+    }
+
+    async fn control<T: Serialize, R: DeserializeOwned>(&self, name: &str, body: &T) -> Result<R> {
+        let envelope = self.envelope(Class::Control, name, encode_data(body)?, None)?;
+        let answer = self.request(envelope, self.shared.query_timeout).await?;
+        match answer.class {
+            Class::Reply => Ok(decode_data(&answer.data)?),
+            _ => Err(route_error(&answer)),
+        }
+    }
+
+    /// Sends and waits for the envelope that answers it.
+    async fn request(&self, envelope: Envelope, timeout: Duration) -> Result<Envelope> {
+        let (tx, rx) = oneshot::channel();
+        let id = envelope.id;
+        lock(&self.shared.pending).insert(id, tx);
+        if let Err(e) = self.transmit(&envelope) {
+            lock(&self.shared.pending).remove(&id);
+            return Err(e);
+        }
+        match tokio::time::timeout(timeout, rx).await {
+            Ok(Ok(answer)) => Ok(answer),
+            Ok(Err(_)) => Err(ModuleError::Disconnected),
+            Err(_) => {
+                lock(&self.shared.pending).remove(&id);
+                Err(ModuleError::Timeout {
+                    name: envelope.name.to_string(),
+                    timeout,
+                })
+            }
+        }
+    }
+
+    pub(crate) fn next_id(&self) -> MessageId {
+        let seq = self.shared.seq.fetch_add(1, Ordering::Relaxed);
+        MessageId::new(self.shared.link_no, seq)
+    }
+
+    pub(crate) fn envelope(
+        &self,
+        class: Class,
+        name: &str,
+        data: Vec<u8>,
+        options: Option<SendOptions>,
+    ) -> Result<Envelope> {
+        Ok(Envelope {
+            id: self.next_id(),
+            class,
+            name: MessageName::new(name).map_err(|e| ModuleError::Usage(e.to_string()))?,
+            sender: self.shared.name.clone(),
+            context: self.context,
+            node: None,
+            correlation: None,
+            timestamp_ns: now_ns(),
+            options: options.unwrap_or_default(),
+            redelivery: 0,
+            data,
+        })
+    }
+
+    pub(crate) fn transmit(&self, envelope: &Envelope) -> Result<()> {
+        if self.is_closed() {
+            return Err(ModuleError::Disconnected);
+        }
+        let frame = encode(envelope)?;
+        if frame.len() > self.shared.max_frame_bytes {
+            return Err(ModuleError::Codec(tca_messages::CodecError::TooLarge {
+                size: frame.len(),
+                limit: self.shared.max_frame_bytes,
+            }));
+        }
+        self.shared.tx.send(Bytes::from(frame))
+    }
+
+    /// Reads frames from central until the link closes. Holds the module weakly, so the link
+    /// closes when the last [`Module`] handle is dropped (as when a module process dies).
+    pub(crate) async fn receive_loop(
+        shared: std::sync::Weak<Shared>,
+        mut rx: mpsc::UnboundedReceiver<Bytes>,
+    ) {
+        while let Some(frame) = rx.recv().await {
+            let Some(shared) = shared.upgrade() else {
+                return;
+            };
+            let module = Module {
+                shared,
+                context: None,
+            };
+            match decode(&frame, usize::MAX) {
+                Ok(envelope) => module.on_envelope(envelope),
+                Err(e) => {
+                    tracing::warn!(module = %module.shared.name, error = %e, "bad frame from central")
+                }
+            }
+        }
+        let Some(shared) = shared.upgrade() else {
+            return;
+        };
+        shared.closed.store(true, Ordering::Relaxed);
+        shared.closed_signal.send_replace(true);
+        // Fail everything still waiting: dropping the senders wakes the waiters.
+        lock(&shared.pending).clear();
+        for (_, w) in lock(&shared.watchers).drain() {
+            let _ = w.send(Err(ModuleError::Disconnected));
+        }
+        for (_, h) in lock(&shared.running).drain() {
+            h.abort();
+        }
+        tracing::info!(module = %shared.name, "link to central closed");
+    }
+
+    fn on_envelope(&self, envelope: Envelope) {
+        match envelope.class {
+            Class::Query | Class::Goal | Class::Command | Class::Inform | Class::Exception => {
+                self.run_handler(envelope)
+            }
+            Class::Reply | Class::Failure | Class::Error => {
+                let Some(id) = envelope.correlation else {
+                    tracing::warn!(?envelope, "answer without correlation");
+                    return;
+                };
+                if let Some(tx) = lock(&self.shared.pending).remove(&id) {
+                    let _ = tx.send(envelope);
+                } else if let Some(tx) = lock(&self.shared.watchers).remove(&id) {
+                    let _ = tx.send(Err(route_error(&envelope)));
+                } else if envelope.class == Class::Error {
+                    tracing::warn!(module = %self.shared.name, error = %route_error(&envelope), about = %id, "central reported an error");
+                }
+            }
+            Class::Control => self.on_control(envelope),
+            other => tracing::warn!(class = %other, "unexpected class from central"),
+        }
+    }
+
+    fn on_control(&self, envelope: Envelope) {
+        match envelope.name.as_str() {
+            names::CANCEL => {
+                if let Ok(cancel) = decode_data::<Cancel>(&envelope.data) {
+                    if let Some(h) = lock(&self.shared.running).remove(&cancel.node) {
+                        tracing::info!(node = %cancel.node, "handler cancelled by central");
+                        h.abort();
+                    }
+                }
+            }
+            names::TASK_ENDED => {
+                if let (Some(id), Ok(ended)) = (
+                    envelope.correlation,
+                    decode_data::<TaskEnded>(&envelope.data),
+                ) {
+                    if let Some(tx) = lock(&self.shared.watchers).remove(&id) {
+                        let _ = tx.send(Ok(ended.outcome));
+                    }
+                }
+            }
+            other => tracing::debug!(name = other, "control message ignored"),
+        }
+    }
+
+    fn run_handler(&self, envelope: Envelope) {
+        let Some(entry) = self.shared.handlers.get(&envelope.name).cloned() else {
+            // Central only routes what we registered; answer so nobody waits forever.
+            let reason = format!(
+                "module {} has no handler for {}",
+                self.shared.name, envelope.name
+            );
+            self.answer(&envelope, Err(reason));
+            return;
+        };
+        let node = envelope.node;
+        let ctx = Context::new(self.in_context(node), envelope.redelivery);
+        let module = self.clone();
+        let call = entry.call.clone();
+        let data = envelope.data.clone();
+        // Hold the table while spawning so the handler cannot finish (and remove itself)
+        // before it is entered.
+        let mut running = lock(&self.shared.running);
+        let task = tokio::spawn(async move {
+            let result = call(ctx, data).await;
+            if let Some(n) = node {
+                lock(&module.shared.running).remove(&n);
+            }
+            module.answer(&envelope, result.map_err(|e| e.reason));
+        });
+        if let Some(n) = node {
+            running.insert(n, task.abort_handle());
+        }
+    }
+
+    /// Sends the end of a handler: reply, success or failure.
+    fn answer(&self, request: &Envelope, result: std::result::Result<Vec<u8>, String>) {
+        let (class, data) = match (request.class, result) {
+            (Class::Query, Ok(data)) => (Class::Reply, data),
+            (Class::Goal | Class::Command | Class::Exception, Ok(_)) => {
+                (Class::Success, encode_data(&()).unwrap_or_default())
+            }
+            (Class::Inform, Ok(_)) => return,
+            (_, Ok(_)) => return,
+            (Class::Inform, Err(reason)) => {
+                tracing::warn!(name = %request.name, %reason, "inform handler failed");
+                return;
+            }
+            (_, Err(reason)) => {
+                tracing::debug!(name = %request.name, %reason, "handler failed");
+                (
+                    Class::Failure,
+                    encode_data(&Failure { reason }).unwrap_or_default(),
+                )
+            }
+        };
+        let mut envelope =
+            match self
+                .in_context(request.node)
+                .envelope(class, request.name.as_str(), data, None)
+            {
+                Ok(e) => e,
+                Err(e) => {
+                    tracing::error!(error = %e, "cannot build answer");
+                    return;
+                }
+            };
+        envelope.correlation = Some(request.id);
+        envelope.node = request.node;
+        if let Err(e) = self.transmit(&envelope) {
+            tracing::warn!(error = %e, name = %request.name, "answer not sent");
+        }
+    }
+}
+
+fn route_error(envelope: &Envelope) -> ModuleError {
+    match decode_data::<RouteError>(&envelope.data) {
+        Ok(e) => ModuleError::Route(e),
+        Err(e) => ModuleError::Connect(format!("unreadable error from central: {e}")),
+    }
+}
+
+fn expect_class<M: Message>(class: Class) -> Result<()> {
+    if M::CLASS == class {
+        Ok(())
+    } else {
+        Err(ModuleError::Usage(format!(
+            "{} is declared as a {}, not a {class}",
+            M::NAME,
+            M::CLASS
+        )))
+    }
+}
+
+pub(crate) fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|p| p.into_inner())
+}

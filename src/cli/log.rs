@@ -1,0 +1,57 @@
+//! `tca log`: reading traffic logs.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context as _;
+use clap::{Args, Subcommand};
+use tca_logs::{LogFile, ShowFilter};
+use tca_messages::Class;
+
+#[derive(Debug, Subcommand)]
+pub(crate) enum LogCommand {
+    /// Print the traffic readably, one line per message.
+    Show(ShowArgs),
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct ShowArgs {
+    /// The log file (written by `tca central --log`).
+    file: PathBuf,
+    /// Only traffic from or to this module.
+    #[arg(long)]
+    module: Option<String>,
+    /// Only this message name.
+    #[arg(long)]
+    name: Option<String>,
+    /// Only this class (query, goal, command, inform, exception, reply, success, failure,
+    /// error, control).
+    #[arg(long)]
+    class: Option<Class>,
+    /// Print every frame in both directions.
+    #[arg(long)]
+    all: bool,
+}
+
+pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
+    match cmd {
+        LogCommand::Show(args) => {
+            let log = LogFile::open(&args.file)
+                .with_context(|| format!("cannot read log {}", args.file.display()))?;
+            let filter = ShowFilter {
+                module: args.module,
+                name: args.name,
+                class: args.class,
+                all_frames: args.all,
+            };
+            use std::io::Write as _;
+            let mut out = std::io::stdout().lock();
+            for line in tca_logs::render(&log, &filter) {
+                if writeln!(out, "{line}").is_err() {
+                    break; // reader closed the pipe (e.g. `| head`)
+                }
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+    }
+}

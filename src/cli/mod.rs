@@ -1,0 +1,99 @@
+//! Command-line parsing and the subcommands.
+
+mod central;
+mod log;
+mod module;
+mod ping;
+mod registry;
+mod up;
+
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+use tca_central::zenoh_transport::DEFAULT_ENDPOINT;
+
+/// Task Control Architecture: central control, modules and the tools around them.
+#[derive(Debug, Parser)]
+#[command(name = "tca", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Run central control, serving modules over zenoh.
+    Central(central::CentralArgs),
+    /// Run one built-in module as its own process.
+    Module(module::ModuleArgs),
+    /// Start central and the modules of a launch file; Ctrl-C stops them all.
+    Up(up::UpArgs),
+    /// Time query round trips between two modules through central.
+    Ping(ping::PingArgs),
+    /// Print the registry: every registered message, its handler and data format.
+    Registry(registry::RegistryArgs),
+    /// Read traffic logs.
+    #[command(subcommand)]
+    Log(log::LogCommand),
+}
+
+/// Where to find central (shared by the commands that connect).
+#[derive(Debug, Clone, Args)]
+pub(crate) struct ConnectArgs {
+    /// zenoh endpoint of central, e.g. tcp/127.0.0.1:7447.
+    #[arg(long, value_name = "ENDPOINT")]
+    pub(crate) connect: Option<String>,
+}
+
+impl ConnectArgs {
+    /// The endpoint, or the default one.
+    pub(crate) fn endpoint_or_default(&self) -> String {
+        self.connect
+            .clone()
+            .unwrap_or_else(|| DEFAULT_ENDPOINT.to_owned())
+    }
+}
+
+fn init_tracing() {
+    use tracing_subscriber::EnvFilter;
+    let filter = EnvFilter::try_from_env("TCA_LOG")
+        .or_else(|_| EnvFilter::try_from_default_env())
+        .unwrap_or_else(|_| EnvFilter::new("warn"));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .try_init();
+}
+
+/// Entry point: parses arguments, runs the command, prints errors with their causes.
+pub(crate) fn main() -> ExitCode {
+    let cli = Cli::parse();
+    init_tracing();
+    let runtime = match tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+    {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: cannot start the async runtime: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let result = runtime.block_on(async move {
+        match cli.command {
+            Command::Central(args) => central::run(args).await,
+            Command::Module(args) => module::run(args).await,
+            Command::Up(args) => up::run(args).await,
+            Command::Ping(args) => ping::run(args).await,
+            Command::Registry(args) => registry::run(args).await,
+            Command::Log(cmd) => log::run(cmd).await,
+        }
+    });
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,127 @@
+//! Launch files for `tca up`: central's options and the modules to start as processes.
+//!
+//! ```toml
+//! [central]
+//! listen = ["tcp/127.0.0.1:7447"]   # zenoh endpoints (default tcp/127.0.0.1:7447)
+//! log = "out/traffic.mcap"          # optional traffic log
+//!
+//! [[module]]
+//! name = "echo"                     # a built-in module: runs `tca module echo --connect ...`
+//!
+//! [[module]]
+//! name = "my-planner"               # or any program; it gets TCA_CONNECT=<endpoint>
+//! command = ["./target/release/my-planner", "--fast"]
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+/// A launch file.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Launch {
+    /// Central's options.
+    #[serde(default)]
+    pub central: CentralSection,
+    /// Modules to start, in order.
+    #[serde(default, rename = "module")]
+    pub modules: Vec<ModuleSection>,
+}
+
+/// `[central]`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CentralSection {
+    /// zenoh endpoints to listen on.
+    #[serde(default = "default_listen")]
+    pub listen: Vec<String>,
+    /// Traffic log file.
+    pub log: Option<PathBuf>,
+}
+
+impl Default for CentralSection {
+    fn default() -> Self {
+        CentralSection {
+            listen: default_listen(),
+            log: None,
+        }
+    }
+}
+
+fn default_listen() -> Vec<String> {
+    vec![tca_central::zenoh_transport::DEFAULT_ENDPOINT.to_owned()]
+}
+
+/// `[[module]]`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModuleSection {
+    /// The module's name (a built-in module unless `command` is given).
+    pub name: String,
+    /// A program to run instead of the built-in module.
+    pub command: Option<Vec<String>>,
+    /// Extra arguments for the built-in module.
+    #[serde(default)]
+    pub args: Vec<String>,
+}
+
+impl Launch {
+    /// Reads and checks a launch file.
+    pub fn load(path: &Path) -> anyhow::Result<Self> {
+        use anyhow::Context as _;
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read launch file {}", path.display()))?;
+        Self::parse(&text).with_context(|| format!("launch file {}", path.display()))
+    }
+
+    /// Parses and checks launch-file text.
+    pub fn parse(text: &str) -> anyhow::Result<Self> {
+        let launch: Launch = toml::from_str(text)?;
+        if launch.central.listen.is_empty() {
+            anyhow::bail!(
+                "[central] listen is empty; give at least one endpoint such as tcp/127.0.0.1:7447"
+            );
+        }
+        for m in &launch.modules {
+            if let Some(cmd) = &m.command {
+                if cmd.is_empty() {
+                    anyhow::bail!("module {}: command is empty", m.name);
+                }
+            } else if !crate::builtin::BUILTIN_MODULES.contains(&m.name.as_str()) {
+                anyhow::bail!(
+                    "module {}: not a built-in module ({}); give a command to run it",
+                    m.name,
+                    crate::builtin::BUILTIN_MODULES.join(", ")
+                );
+            }
+        }
+        Ok(launch)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_launch_file_parses() {
+        let l = Launch::parse(
+            "[central]\nlisten=[\"tcp/127.0.0.1:7500\"]\n[[module]]\nname=\"echo\"\n",
+        )
+        .unwrap();
+        assert_eq!(l.modules.len(), 1);
+        assert_eq!(l.central.listen, vec!["tcp/127.0.0.1:7500"]);
+    }
+
+    #[test]
+    fn mistakes_are_named() {
+        let err = Launch::parse("[[module]]\nname=\"nope\"\n").unwrap_err();
+        assert!(
+            format!("{err:#}").contains("not a built-in module"),
+            "{err:#}"
+        );
+        let err = Launch::parse("[central]\nlissen=[]\n").unwrap_err();
+        assert!(format!("{err:#}").contains("lissen"), "{err:#}");
+    }
+}

@@ -1,0 +1,13 @@
+//! The `tca` command's library: the pieces the command assembles, shared with the
+//! whole-system tests and benchmarks.
+//!
+//! # Layout
+//!
+//! - [`builtin`]: modules built into the command (`tca module NAME`): the echo used by
+//!   `tca ping`.
+//! - [`launch`]: launch files for `tca up`.
+//! - [`ping`]: timing query round trips through central.
+
+pub mod builtin;
+pub mod launch;
+pub mod ping;
