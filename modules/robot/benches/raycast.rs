@@ -37,9 +37,8 @@ fn cast_all(t: &HeightField, origin: &Point3<f64>, dirs: &[Vector3<f64>]) -> usi
 }
 
 fn bench(c: &mut Criterion) {
-    let terrain = Course::builtin(3)
-        .map(|c| c.height_field())
-        .unwrap_or_else(|e| panic!("{e}"));
+    let course = Course::builtin(3).expect("course 3 exists");
+    let terrain = course.height_field().expect("course 3 renders");
     let (origin, perceptron) = directions(256, 256, 60f64.to_radians(), 60f64.to_radians());
     let (_, erim) = directions(64, 256, 30f64.to_radians(), 80f64.to_radians());
     c.bench_function("cast 256x256 (Perceptron) course 3", |b| {
@@ -49,7 +48,6 @@ fn bench(c: &mut Criterion) {
         b.iter(|| cast_all(black_box(&terrain), &origin, &erim))
     });
     c.bench_function("render course 3 at 2 cm", |b| {
-        let course = Course::builtin(3).unwrap_or_else(|e| panic!("{e}"));
         b.iter(|| course.height_field())
     });
 }

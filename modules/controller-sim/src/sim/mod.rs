@@ -72,6 +72,34 @@ pub enum StartPose {
 }
 
 /// The simulated leg, carriage and terrain behind the Controller interface.
+///
+/// # Example
+///
+/// ```
+/// use nalgebra::Point2;
+/// use tca_controller_sim::sim::{LegSimulator, StartPose};
+/// use tca_robot::{Course, ElbowBranch, JointPosition, LegParams};
+///
+/// let terrain = Course::builtin(1)?.height_field()?;
+/// let start = StartPose::PlantedAt {
+///     carriage_y_m: 1.0,
+///     foot_xy: Point2::new(3.8, 1.2),
+///     branch: ElbowBranch::Positive,
+///     force_n: 2224.1,
+/// };
+/// let mut sim = LegSimulator::new(LegParams::default(), terrain, start)?;
+/// // Lift the foot 30 cm, then lower it again in transition mode: it stops on the ground
+/// // when the force reaches the set point.
+/// let q = sim.joint_leg_position();
+/// sim.leg_move(&[JointPosition { vertical_m: q.vertical_m - 0.3, ..q }], false)?;
+/// let report = sim.leg_move(&[q], true)?;
+/// assert!(report.contact.is_some());
+/// // Walk the carriage half a metre forward over the planted foot.
+/// sim.body_move(1.5)?;
+/// assert!((sim.body_position().y_m - 1.5).abs() <= 0.01);
+/// assert!(sim.clock().as_secs_f64() > 20.0); // simulated time; nothing slept
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct LegSimulator {
     params: LegParams,

@@ -546,7 +546,7 @@ fn a_step_walks_forward() {
     let course = tca_robot::Course::builtin(1).unwrap();
     let mut sim = LegSimulator::new(
         LegParams::default(),
-        course.height_field(),
+        course.height_field().unwrap(),
         StartPose::PlantedAt {
             carriage_y_m: 1.0,
             foot_xy: Point2::new(3.8, 1.2),
@@ -564,4 +564,45 @@ fn a_step_walks_forward() {
     let report = sim.body_move(2.2).unwrap();
     assert!((report.final_y_m - 2.2).abs() <= 0.01);
     assert!(sim.clock() > Duration::from_secs(60));
+}
+
+mod invariants {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+        /// Whatever the way-points, the real foot never ends inside the terrain: a move either
+        /// completes clear of it, stops touching it, or stands on it.
+        #[test]
+        fn the_foot_never_ends_inside_the_terrain(
+            seed in 0u64..1000,
+            moves in proptest::collection::vec((-1.2f64..1.2, 0.3f64..2.4, 3.0f64..4.45, any::<bool>()), 1..4),
+        ) {
+            let course = tca_robot::Course::random(seed);
+            let t = course.height_field().unwrap();
+            let params = LegParams::default();
+            let start = JointPosition::new(0.8, 1.2, 3.0);
+            let mut sim = LegSimulator::new(params.clone(), t.clone(), StartPose::Joints { carriage_y_m: 3.0, joints: start }).unwrap();
+            for (shoulder, elbow, vertical, transition) in moves {
+                let target = JointPosition::new(shoulder + 1.0, elbow, vertical);
+                let result = sim.leg_move(&[target], transition);
+                let foot = sim.true_foot_position();
+                let h = t.max_height_in_disc(foot.xy(), params.leg.foot_radius_m);
+                prop_assert!(foot.z - h >= -1e-3, "foot {} under terrain {h} after {result:?}", foot);
+                if let Err(SimError::Collision { foot_world, terrain_height_m, dragged: false, .. }) = &result {
+                    prop_assert!((foot_world.z - terrain_height_m).abs() < 1e-3, "{foot_world} vs {terrain_height_m}");
+                }
+                if let Ok(report) = &result {
+                    for s in &report.path {
+                        let h = t.max_height_in_disc(s.foot_world.xy(), params.leg.foot_radius_m);
+                        prop_assert!(s.foot_world.z - h >= -1e-3);
+                    }
+                }
+                // Lift clear before the next move, as a planner would.
+                let q = sim.joint_leg_position();
+                let _ = sim.leg_move(&[JointPosition { vertical_m: 3.0, ..q }], false);
+            }
+        }
+    }
 }

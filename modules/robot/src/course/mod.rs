@@ -309,13 +309,10 @@ impl Course {
             .sum()
     }
 
-    /// The course rendered at [`DEFAULT_RESOLUTION_M`] (2 cm) over the whole pit.
-    pub fn height_field(&self) -> HeightField {
-        match self.render(DEFAULT_RESOLUTION_M) {
-            Ok(t) => t,
-            // The default resolution is valid and every feature height is finite.
-            Err(err) => unreachable!("rendering at the default resolution failed: {err}"),
-        }
+    /// The course rendered at [`DEFAULT_RESOLUTION_M`] (2 cm) over the whole pit. Fails only
+    /// if a feature has a non-finite size or height.
+    pub fn height_field(&self) -> Result<HeightField, TerrainError> {
+        self.render(DEFAULT_RESOLUTION_M)
     }
 
     /// The course rendered over the whole pit with samples every `resolution_m`.

@@ -31,7 +31,7 @@ fn clear_footfall(t: &HeightField, c: Point2<f64>) -> bool {
 
 /// For each carriage stop every 1.5 m from y = 1 m, a clear footfall ahead within reach.
 fn assert_walkable(course: &Course) {
-    let t = course.height_field();
+    let t = course.height_field().unwrap();
     let params = LegParams::default();
     let reach = params.leg.upper_link_m + params.leg.lower_link_m - 0.2;
     let mut stop = 1.0;
@@ -90,7 +90,7 @@ fn course_1_is_rolling_sand_trenches_and_small_obstacles() {
     let c = Course::builtin(1).unwrap();
     assert!(c.feature("rolling-sand").is_some());
     assert_eq!(c.features_named("trench-").count(), 2);
-    let t = c.height_field();
+    let t = c.height_field().unwrap();
     for f in c.features.iter().filter(|f| f.is_object()) {
         let top = t.max_height_in_disc(f.center(), 0.05);
         assert!(top < 0.4, "{} is a small obstacle: {top}", f.name);
@@ -114,7 +114,7 @@ fn course_2_is_a_steeplechase_with_boxes_and_rocks() {
     assert!(c.features_named("box-").count() >= 2);
     assert!(c.features_named("rock-").count() >= 3);
     assert!(c.feature("sun-box").is_none());
-    let t = c.height_field();
+    let t = c.height_field().unwrap();
     let p = pylons[0].center();
     assert!((t.height_at(p.x, p.y) - 0.7).abs() < 0.05, "pylon tip");
     // Nothing is taller than the foot can lift over (1.0 m).
@@ -135,7 +135,7 @@ fn course_3_adds_the_big_box_at_the_beginning() {
         (centre.x - params.carriage.x_m).abs() < 0.5,
         "in the leg's way"
     );
-    let t = c3.height_field();
+    let t = c3.height_field().unwrap();
     let top = t.height_at(centre.x, centre.y);
     assert!(
         top > foot_top + 0.1,
@@ -193,7 +193,7 @@ fn course_4_has_course_3_on_the_right_and_the_new_obstacles_on_the_left() {
     }
     let hill = c4.feature("sand-hill").unwrap();
     let trench = c4.feature("deep-trench").unwrap();
-    let t = c4.height_field();
+    let t = c4.height_field().unwrap();
     assert!(hill.center().x < 3.0 && t.height_at(hill.center().x, hill.center().y) > 0.4);
     let floor = t.height_at(trench.center().x, trench.center().y);
     assert!(

@@ -29,6 +29,19 @@ pub enum TerrainError {
         /// Rows.
         ny: usize,
     },
+    /// The rectangle and resolution ask for too many samples.
+    #[error(
+        "a height field over {width_m} x {length_m} m at {resolution_m} m would need more than \
+         {MAX_SAMPLES} samples; use a coarser resolution"
+    )]
+    TooLarge {
+        /// Extent along X, metres.
+        width_m: f64,
+        /// Extent along Y, metres.
+        length_m: f64,
+        /// Resolution asked for, metres.
+        resolution_m: f64,
+    },
     /// A height is NaN or infinite.
     #[error("height at cell ({ix}, {iy}) is {value}, not a finite number")]
     NotFinite {
@@ -212,11 +225,30 @@ impl HeightField {
                 }
             }
         }
+        // The rim: sample it at half a cell, then refine the two highest samples by a
+        // golden-section search between their neighbours (the surface is smooth along the
+        // rim within a cell), so a steep face is located to a fraction of a millimetre.
         let n = ((std::f64::consts::TAU * radius_m / (0.5 * r)).ceil() as usize).clamp(16, 4096);
-        for k in 0..n {
-            let a = std::f64::consts::TAU * k as f64 / n as f64;
+        let step = std::f64::consts::TAU / n as f64;
+        let rim = |a: f64| {
             let (s, c) = a.sin_cos();
-            best = best.max(self.height_at(center.x + radius_m * c, center.y + radius_m * s));
+            self.height_at(center.x + radius_m * c, center.y + radius_m * s)
+        };
+        let mut top = [(f64::NEG_INFINITY, 0.0); 2];
+        for k in 0..n {
+            let a = step * k as f64;
+            let h = rim(a);
+            if h > top[0].0 {
+                top = [(h, a), top[0]];
+            } else if h > top[1].0 {
+                top[1] = (h, a);
+            }
+        }
+        for (h, a) in top {
+            best = best.max(h);
+            if h.is_finite() {
+                best = best.max(golden_max(&rim, a - step, a + step));
+            }
         }
         best
     }
@@ -227,6 +259,32 @@ impl HeightField {
     }
 }
 
+/// Largest value of `f` on `[lo, hi]` found by a golden-section search (exact for a function
+/// with one local maximum there; otherwise a local maximum).
+fn golden_max(f: &impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
+    const INV_PHI: f64 = 0.618_033_988_749_895;
+    let mut a = hi - INV_PHI * (hi - lo);
+    let mut b = lo + INV_PHI * (hi - lo);
+    let (mut fa, mut fb) = (f(a), f(b));
+    for _ in 0..24 {
+        if fa < fb {
+            lo = a;
+            (a, fa) = (b, fb);
+            b = lo + INV_PHI * (hi - lo);
+            fb = f(b);
+        } else {
+            hi = b;
+            (b, fb) = (a, fa);
+            a = hi - INV_PHI * (hi - lo);
+            fa = f(a);
+        }
+    }
+    fa.max(fb)
+}
+
+/// Most samples [`HeightField::flat`] and course rendering will allocate.
+pub const MAX_SAMPLES: usize = 100_000_000;
+
 /// Number of samples (nx, ny) at `resolution_m` covering `[min, max]` with sample 0 at `min`.
 pub(crate) fn samples_covering(
     min: Point2<f64>,
@@ -236,15 +294,16 @@ pub(crate) fn samples_covering(
     if !(resolution_m.is_finite() && resolution_m > 0.0) {
         return Err(GridError::BadResolution(resolution_m).into());
     }
-    let count = |lo: f64, hi: f64| -> Result<usize, TerrainError> {
-        let n = ((hi - lo) / resolution_m - 1e-9).ceil() + 1.0;
-        if (2.0..1e8).contains(&n) {
-            Ok(n as usize)
-        } else {
-            Err(TerrainError::TooSmall { nx: 0, ny: 0 })
-        }
-    };
-    Ok((count(min.x, max.x)?, count(min.y, max.y)?))
+    let count = |lo: f64, hi: f64| ((hi - lo) / resolution_m - 1e-9).ceil().max(1.0) + 1.0;
+    let (nx, ny) = (count(min.x, max.x), count(min.y, max.y));
+    if !(nx.is_finite() && ny.is_finite()) || nx * ny > MAX_SAMPLES as f64 {
+        return Err(TerrainError::TooLarge {
+            width_m: max.x - min.x,
+            length_m: max.y - min.y,
+            resolution_m,
+        });
+    }
+    Ok((nx as usize, ny as usize))
 }
 
 #[cfg(test)]
