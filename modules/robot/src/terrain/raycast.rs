@@ -217,16 +217,26 @@ impl HeightField {
             let t_face = if tx <= ty { tx } else { ty };
             let t_exit = if t_face < t_hi { t_face } else { t_hi };
             let z_min = if descending { z0 + dz * t_exit } else { z_t };
-            if z_min <= lv.max_at(cx, cy) {
+            let block_max = lv.max_at(cx, cy);
+            if z_min <= block_max {
+                // Nothing in this block is hit while the ray is above its top: skip to where
+                // a descending ray comes down to it.
+                let t_in = if descending && dz < 0.0 {
+                    let t_dip = (block_max - z0) / dz;
+                    if t_dip > t { t_dip.min(t_exit) } else { t }
+                } else {
+                    t
+                };
                 if level == 0 {
                     if let Some(hit) =
-                        self.intersect_patch(cx as usize, cy as usize, ray, t, t_exit)
+                        self.intersect_patch(cx as usize, cy as usize, ray, t_in, t_exit)
                     {
                         return Some((hit, cx as usize, cy as usize));
                     }
                 } else {
                     // The ray dips into this block before leaving it: look at its children
-                    // from the entry point.
+                    // from where it comes down to the block's top.
+                    t = t_in;
                     let half = 0.5 * size;
                     let child = &levels[level - 1];
                     let (px, py) = (g0x + gdx * t, g0y + gdy * t);
