@@ -15,7 +15,9 @@ impl TaskTree {
     /// Kills a node and its whole subtree (nodes already achieved are not touched; they
     /// are retired with it). Each killed node is reported as `Killed { was }`; `was:
     /// Handling` means its handler is running and should get a cancel notice. The node
-    /// then counts as finished for its parent, and the subtree is retired.
+    /// then counts as finished for its parent, and the subtree is retired: a `finish` that
+    /// a cancelled handler sends afterwards gets [`TreeError::Retired`], which central can
+    /// ignore.
     pub fn kill(&mut self, id: NodeId, now: Nanos) -> Result<Vec<TreeEvent>> {
         self.check_time(now)?;
         self.live_node(id)?;

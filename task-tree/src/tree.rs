@@ -30,6 +30,12 @@ pub struct TaskTree {
     pub(crate) scratch_edges: Vec<Edge>,
 }
 
+// Central owns the tree from one task and may move it between threads.
+const _: fn() = || {
+    fn send_and_sync<T: Send + Sync>() {}
+    send_and_sync::<TaskTree>();
+};
+
 impl Default for TaskTree {
     fn default() -> Self {
         TaskTree::new()
