@@ -145,6 +145,28 @@
 //! [`TreeOp`]; [`TaskTree::apply`] replays ops into a fresh tree and reproduces the same
 //! ids, states and events.
 //!
+//! # Changes from the brief, and why
+//!
+//! - A goal's achievement starts when its handler finishes if nothing below it started
+//!   it earlier (not when the goal is achieved): see *Time points*. Without this, some
+//!   acyclic plans deadlocked.
+//! - Two more events: [`TreeEvent::HandlingStarted`], so the event stream records every
+//!   point, and [`TreeEvent::CancelHandler`], for an ancestor whose handler is still
+//!   running when a descendant's failure reaches it. [`TreeEvent`] and [`TreeError`] are
+//!   `#[non_exhaustive]`: match them with a `_` arm.
+//! - "Unless the caller handles it first" is made precise by holding failures under a
+//!   suspension (see *Failure, kill and exceptions*).
+//! - Queries cannot be constrained or have children, and their failure does not
+//!   propagate: the tree never schedules them.
+//! - Finished nodes are retired at once, so [`TaskTree::get`] returns `None` right after
+//!   a node's `Achieved`, `Killed` or final `Failed` event: keep what you need from the
+//!   events.
+//! - When a command starts, its ancestors' `AchievementStarted` events come before its
+//!   `HandlingStarted`, so the event order never shows a child's achievement before its
+//!   parent's.
+//! - [`TaskTree::plan_first`] is a method (and [`NewConstraint::PlanFirst`]), not a
+//!   single point constraint, because it must also cover goals added later.
+//!
 //! # Example
 //!
 //! ```

@@ -16,7 +16,7 @@
 #![allow(dead_code)]
 
 use std::cmp::Reverse;
-use std::collections::{BinaryHeap, VecDeque};
+use std::collections::{BinaryHeap, HashMap, VecDeque};
 
 use tca_task_tree::{Nanos, NewConstraint, NodeId, NodeSpec, Outcome, TaskTree, TreeEvent, TreeOp};
 
@@ -92,16 +92,17 @@ pub(crate) struct WalkSim {
     mode: Mode,
     steps: u32,
     durations: Durations,
-    /// Role of each node, indexed by id.
-    roles: Vec<Option<Role>>,
+    /// Role of each live node (dropped when the node retires, so the driver's memory stays
+    /// bounded like the tree's).
+    roles: HashMap<NodeId, Role>,
     walk: NodeId,
-    /// bodyMove of each step, indexed by step.
-    body_moves: Vec<NodeId>,
+    /// bodyMove of the last steps, by step (older ones are dropped).
+    body_moves: HashMap<u32, NodeId>,
     queues: [VecDeque<NodeId>; 4],
     busy: [bool; 4],
     running: BinaryHeap<Reverse<(Nanos, u64, NodeId)>>,
     sequence: u64,
-    /// Handling starts, in order.
+    /// Handling starts, in order (kept only when `record` is set).
     pub(crate) starts: Vec<(Nanos, Role)>,
     /// When true, every op and event is kept.
     pub(crate) record: bool,
@@ -121,9 +122,9 @@ impl WalkSim {
             mode,
             steps,
             durations,
-            roles: vec![None],
+            roles: HashMap::new(),
             walk: NodeId(0),
-            body_moves: vec![NodeId(0); steps as usize + 2],
+            body_moves: HashMap::new(),
             queues: Default::default(),
             busy: [false; 4],
             running: BinaryHeap::new(),
@@ -139,15 +140,22 @@ impl WalkSim {
     }
 
     fn role(&self, id: NodeId) -> Option<Role> {
-        self.roles.get(id.0 as usize).copied().flatten()
+        self.roles.get(&id).copied()
     }
 
     fn take(&mut self, events: Vec<TreeEvent>) {
         for e in &events {
-            if let TreeEvent::Ready(id) = e
-                && let Some(role) = self.role(*id)
-            {
-                self.queues[role.module()].push_back(*id);
+            match e {
+                TreeEvent::Ready(id) => {
+                    if let Some(role) = self.role(*id) {
+                        self.queues[role.module()].push_back(*id);
+                    }
+                }
+                // Every node of the walk is achieved and retired on its own.
+                TreeEvent::Retired(id) => {
+                    self.roles.remove(id);
+                }
+                _ => {}
             }
         }
         if self.record {
@@ -181,11 +189,7 @@ impl WalkSim {
             });
         }
         self.nodes_added += 1;
-        let index = id.0 as usize;
-        if self.roles.len() <= index {
-            self.roles.resize(index + 1, None);
-        }
-        self.roles[index] = Some(role);
+        self.roles.insert(id, role);
         self.take(events);
         id
     }
@@ -197,23 +201,23 @@ impl WalkSim {
                 self.add(Role::PlanGait(1), Some(id), Vec::new());
             }
             Role::PlanGait(k) => {
-                let mut leg_with = Vec::new();
-                if k >= 2 {
-                    leg_with.push(NewConstraint::sequential_achievement_after(
-                        self.body_moves[k as usize - 1],
-                    ));
-                }
+                let previous_body = self.body_moves.get(&(k - 1)).copied();
+                let leg_with = previous_body
+                    .map(NewConstraint::sequential_achievement_after)
+                    .into_iter()
+                    .collect();
                 let leg = self.add(Role::LegMoveGoal(k), Some(id), leg_with);
                 let body = self.add(
                     Role::BodyMove(k),
                     Some(id),
                     vec![NewConstraint::sequential_achievement_after(leg)],
                 );
-                self.body_moves[k as usize] = body;
+                self.body_moves.insert(k, body);
+                self.body_moves.remove(&k.saturating_sub(2));
                 if k < self.steps {
                     let wait_for = match self.mode {
                         Mode::Sequential => Some(body),
-                        Mode::Concurrent => (k >= 2).then(|| self.body_moves[k as usize - 1]),
+                        Mode::Concurrent => previous_body,
                     };
                     let with = wait_for
                         .map(NewConstraint::delay_planning_until)
@@ -259,7 +263,9 @@ impl WalkSim {
                 let Some(role) = self.role(id) else {
                     continue;
                 };
-                self.starts.push((self.now, role));
+                if self.record {
+                    self.starts.push((self.now, role));
+                }
                 self.busy[module] = true;
                 self.sequence += 1;
                 self.running.push(Reverse((
