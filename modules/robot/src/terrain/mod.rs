@@ -156,7 +156,8 @@ impl HeightField {
             } else {
                 g.clamp(0.0, (n - 1) as f64)
             };
-            let i = (g.floor() as usize).min(n - 2);
+            // Truncation is the floor here (g >= 0) and much cheaper than `floor`.
+            let i = (g as usize).min(n - 2);
             (i, g - i as f64)
         };
         let (ix, u) = clamp(gx, self.grid.nx());
@@ -232,22 +233,32 @@ impl HeightField {
         // is found to a fraction of a millimetre while flat ground costs no search.
         let n = ((std::f64::consts::TAU * radius_m / (0.5 * r)).ceil() as usize).clamp(16, 4096);
         let step = std::f64::consts::TAU / n as f64;
-        let rim_point = |a: f64| {
-            let (s, c) = a.sin_cos();
-            Point2::new(center.x + radius_m * c, center.y + radius_m * s)
-        };
         let rim = |a: f64| {
-            let p = rim_point(a);
-            self.height_at(p.x, p.y)
+            let (s, c) = a.sin_cos();
+            self.height_at(center.x + radius_m * c, center.y + radius_m * s)
         };
-        let heights: Vec<f64> = (0..n).map(|k| rim(step * k as f64)).collect();
+        // Rim directions by rotating a unit vector (no trigonometry per sample).
+        let (turn_s, turn_c) = step.sin_cos();
+        let (half_s, half_c) = (0.5 * step).sin_cos();
+        let mut heights = Vec::with_capacity(n);
+        let mut mids = Vec::with_capacity(n);
+        let (mut c, mut s) = (1.0_f64, 0.0_f64);
+        for _ in 0..n {
+            heights.push(self.height_at(center.x + radius_m * c, center.y + radius_m * s));
+            let (mc, ms) = (c * half_c - s * half_s, s * half_c + c * half_s);
+            mids.push(Point2::new(
+                center.x + radius_m * mc,
+                center.y + radius_m * ms,
+            ));
+            (c, s) = (c * turn_c - s * turn_s, s * turn_c + c * turn_s);
+        }
         for &h in &heights {
             best = best.max(h);
         }
         let half_arc = 0.5 * radius_m * step;
         for k in 0..n {
             let (h0, h1) = (heights[k], heights[(k + 1) % n]);
-            let (top, bottom) = self.samples_around(rim_point(step * (k as f64 + 0.5)));
+            let (top, bottom) = self.samples_around(mids[k]);
             let slope = std::f64::consts::SQRT_2 * (top - bottom) / r;
             let bound = top.min(h0.max(h1) + slope * half_arc);
             if bound > best + RIM_TOLERANCE_M {
@@ -260,8 +271,16 @@ impl HeightField {
     /// Highest and lowest of the 3 x 3 samples around the sample nearest to `p`: bounds of
     /// the surface within a cell of that sample.
     fn samples_around(&self, p: Point2<f64>) -> (f64, f64) {
-        let c = self.grid.nearest_cell(p);
         let (nx, ny) = (self.grid.nx(), self.grid.ny());
+        let (gx, gy) = self.grid.world_to_grid(p);
+        let nearest = |g: f64, n: usize| {
+            if g + 0.5 >= 0.0 {
+                ((g + 0.5) as usize).min(n - 1)
+            } else {
+                0
+            }
+        };
+        let c = CellIndex::new(nearest(gx, nx), nearest(gy, ny));
         let h = self.grid.cells();
         let (mut top, mut bottom) = (f64::NEG_INFINITY, f64::INFINITY);
         for iy in c.iy.saturating_sub(1)..=(c.iy + 1).min(ny - 1) {
