@@ -156,3 +156,34 @@ proptest! {
         prop_assert_eq!(decode_data::<control::Hello>(&bytes).unwrap(), hello);
     }
 }
+
+#[test]
+fn every_walking_message_has_a_format() {
+    use crate::walking::*;
+    fn check<M: Message>() {
+        let f = M::format().unwrap_or_else(|e| panic!("{}: {e}", M::NAME));
+        f.validate().unwrap();
+        if M::CLASS == Class::Query {
+            assert!(M::reply_format().unwrap().is_some(), "{}", M::NAME);
+        }
+    }
+    check::<BodyMove>();
+    check::<LegMove>();
+    check::<SetTransForce>();
+    check::<BodyPosition>();
+    check::<JointLegPosition>();
+    check::<CartLegPosition>();
+    check::<GlobalLegPosition>();
+    check::<ReadForce>();
+    check::<ControllerStatus>();
+    check::<MoveFailed>();
+    check::<HardwareFault>();
+    check::<AcquireImage>();
+    check::<MapRegion>();
+    check::<RenderMap>();
+    check::<Walk>();
+    check::<PlanStep>();
+    check::<RecoverLeg>();
+    check::<LegReachability>();
+    check::<StepPlanned>();
+}

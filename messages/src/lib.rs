@@ -19,6 +19,7 @@
 //! - [`control`]: payloads of central's own `tca.*` control traffic.
 //! - [`route_error`]: [`RouteError`], what central answers when it cannot route a message.
 //! - [`codec`]: the single encode/decode entry point (postcard), strict and size-limited.
+//! - [`walking`]: the single-leg walking system's message vocabulary, with units.
 //! - [`error`]: error types.
 
 pub mod class;
@@ -32,6 +33,7 @@ pub mod message;
 pub mod route_error;
 mod trace;
 pub mod value;
+pub mod walking;
 
 pub use class::Class;
 pub use codec::{
