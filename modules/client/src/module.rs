@@ -40,8 +40,8 @@ pub(crate) struct Shared {
     pub(crate) query_timeout: Duration,
     closed: AtomicBool,
     closed_signal: tokio::sync::watch::Sender<bool>,
-    /// Keeps the transport open while any handle lives.
-    _keep: crate::connector::Keep,
+    /// Keeps the transport open while any handle lives (taken by [`Module::abort_link`]).
+    keep: Mutex<Option<crate::connector::Keep>>,
 }
 
 /// A module connected to central. Cheap to clone; the connection closes when the last clone
@@ -118,7 +118,7 @@ impl Module {
                 query_timeout,
                 closed: AtomicBool::new(false),
                 closed_signal: tokio::sync::watch::channel(false).0,
-                _keep: keep,
+                keep: Mutex::new(Some(keep)),
             }),
             context: None,
         }
@@ -212,6 +212,14 @@ impl Module {
         self.transmit(&envelope)
     }
 
+    /// Raises an exception in the context of this handle's task node: central routes it to the
+    /// nearest handler registered for its name up the task tree (§3.2).
+    pub fn raise<E: Message>(&self, exception: &E) -> Result<()> {
+        expect_class::<E>(Class::Exception)?;
+        let envelope = self.envelope(Class::Exception, E::NAME, encode_data(exception)?, None)?;
+        self.transmit(&envelope)
+    }
+
     /// The registry of every registered message.
     pub async fn registry(&self) -> Result<Registry> {
         self.control(names::REGISTRY, &()).await
@@ -245,6 +253,17 @@ impl Module {
             let _ = self.request(env, Duration::from_secs(2)).await;
         }
         self.shared.closed.store(true, Ordering::Relaxed);
+        self.shared.closed_signal.send_replace(true);
+    }
+
+    /// Drops the link to central at once, without a goodbye, and stops every running handler:
+    /// what central sees when a module crashes. For testing recovery.
+    pub fn abort_link(&self) {
+        self.shared.closed.store(true, Ordering::Relaxed);
+        for (_, h) in lock(&self.shared.running).drain() {
+            h.abort();
+        }
+        drop(lock(&self.shared.keep).take());
         self.shared.closed_signal.send_replace(true);
     }
 
