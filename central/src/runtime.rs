@@ -157,6 +157,9 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
     })
 }
 
+/// Most inputs handled between two hand-overs to the log writer.
+const MAX_BATCH: usize = 512;
+
 /// The driver loop.
 async fn drive(
     mut core: Central,
@@ -164,10 +167,12 @@ async fn drive(
     mut log: Option<LogSink>,
 ) -> Result<Stats> {
     let mut sinks: HashMap<LinkId, mpsc::UnboundedSender<Bytes>> = HashMap::new();
-    let mut actions = Vec::with_capacity(64);
-    loop {
+    let mut actions = Vec::with_capacity(256);
+    let mut records = Vec::new();
+    let mut stop = false;
+    while !stop {
         let deadline = core.next_deadline();
-        let input = match deadline {
+        let first = match deadline {
             Some(at) => {
                 let wait = Duration::from_nanos(at.saturating_sub(now_ns()));
                 match tokio::time::timeout(wait, rx.recv()).await {
@@ -177,34 +182,49 @@ async fn drive(
             }
             None => rx.recv().await,
         };
-        let Some(input) = input else { break };
-        match input {
-            Input::Event(event) => core.handle(now_ns(), event, &mut actions),
-            Input::Attach(link, sink) => {
-                sinks.insert(link, sink);
+        let Some(first) = first else { break };
+        // Handle what is already queued as one batch: one clock read, one log hand-over.
+        let now = now_ns();
+        let mut next = Some(first);
+        let mut handled = 0;
+        while let Some(input) = next.take() {
+            match input {
+                Input::Event(event) => core.handle(now, event, &mut actions),
+                Input::Attach(link, sink) => {
+                    sinks.insert(link, sink);
+                }
+                Input::Inspect(reply) => {
+                    let _ = reply.send(stats(&core));
+                }
+                Input::Shutdown => {
+                    stop = true;
+                    break;
+                }
             }
-            Input::Inspect(reply) => {
-                let _ = reply.send(stats(&core));
+            // Carry out sends as we go so closes and sends keep their order.
+            for action in actions.drain(..) {
+                match action {
+                    Action::Send(link, frame) => {
+                        if let Some(sink) = sinks.get(&link) {
+                            // A closed sink means the module is gone; its Closed event follows.
+                            let _ = sink.send(frame);
+                        }
+                    }
+                    Action::Log(record) => records.push(record),
+                    Action::Close(link) => {
+                        sinks.remove(&link);
+                    }
+                }
             }
-            Input::Shutdown => break,
+            handled += 1;
+            if handled < MAX_BATCH {
+                next = rx.try_recv().ok();
+            }
         }
-        for action in actions.drain(..) {
-            match action {
-                Action::Send(link, frame) => {
-                    if let Some(sink) = sinks.get(&link) {
-                        // A closed sink means the module is gone; its Closed event follows.
-                        let _ = sink.send(frame);
-                    }
-                }
-                Action::Log(record) => {
-                    if let Some(l) = log.as_mut() {
-                        l.append(record);
-                    }
-                }
-                Action::Close(link) => {
-                    sinks.remove(&link);
-                }
-            }
+        if let Some(l) = log.as_mut() {
+            l.append_batch(std::mem::take(&mut records));
+        } else {
+            records.clear();
         }
     }
     let final_stats = stats(&core);

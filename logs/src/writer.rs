@@ -186,7 +186,7 @@ impl LogWriter {
 }
 
 enum SinkInput {
-    Record(LogRecord),
+    Records(Vec<LogRecord>),
     Finish,
 }
 
@@ -214,7 +214,15 @@ impl LogSink {
 
     /// Queues a record.
     pub fn append(&mut self, record: LogRecord) {
-        if self.tx.send(SinkInput::Record(record)).is_err() {
+        self.append_batch(vec![record]);
+    }
+
+    /// Queues records (one wake-up of the writer thread for the lot).
+    pub fn append_batch(&mut self, records: Vec<LogRecord>) {
+        if records.is_empty() {
+            return;
+        }
+        if self.tx.send(SinkInput::Records(records)).is_err() {
             tracing::error!("log writer thread has stopped; traffic is no longer logged");
         }
     }
@@ -243,27 +251,41 @@ impl Drop for LogSink {
 fn run_sink(mut writer: LogWriter, rx: mpsc::Receiver<SinkInput>) -> Result<()> {
     let mut dirty = false;
     let mut last_flush = Instant::now();
-    loop {
-        let wait = FLUSH_INTERVAL.saturating_sub(last_flush.elapsed());
-        match rx.recv_timeout(wait) {
-            Ok(SinkInput::Record(r)) => {
-                if let Err(e) = writer.append(&r) {
-                    tracing::error!(error = %e, "cannot write log record");
+    let mut finishing = false;
+    while !finishing {
+        let wait = if dirty {
+            FLUSH_INTERVAL.saturating_sub(last_flush.elapsed())
+        } else {
+            // Nothing to flush: sleep until something arrives.
+            Duration::from_secs(3600)
+        };
+        let mut next = match rx.recv_timeout(wait) {
+            Ok(input) => Some(input),
+            Err(mpsc::RecvTimeoutError::Timeout) => None,
+            Err(mpsc::RecvTimeoutError::Disconnected) => break,
+        };
+        // Write everything already queued before looking at the clock again.
+        while let Some(input) = next.take() {
+            match input {
+                SinkInput::Records(records) => {
+                    for r in &records {
+                        if let Err(e) = writer.append(r) {
+                            tracing::error!(error = %e, "cannot write log record");
+                        }
+                    }
+                    dirty = true;
                 }
-                dirty = true;
+                SinkInput::Finish => finishing = true,
             }
-            Ok(SinkInput::Finish) | Err(mpsc::RecvTimeoutError::Disconnected) => break,
-            Err(mpsc::RecvTimeoutError::Timeout) => {}
+            if !finishing {
+                next = rx.try_recv().ok();
+            }
         }
         if dirty && last_flush.elapsed() >= FLUSH_INTERVAL {
             writer.flush()?;
             dirty = false;
             last_flush = Instant::now();
         }
-    }
-    // Drain anything still queued before closing.
-    while let Ok(SinkInput::Record(r)) = rx.try_recv() {
-        writer.append(&r)?;
     }
     writer.finish()
 }
