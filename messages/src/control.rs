@@ -35,6 +35,12 @@ pub mod names {
     pub const TREE: &str = "tca.tree";
     /// Central -> sender: a goal or command it asked to hear about ended ([`super::TaskEnded`]).
     pub const TASK_ENDED: &str = "tca.taskEnded";
+    /// Module -> central: attach the module as handler of an exception on a node
+    /// ([`super::OnException`]).
+    pub const ON_EXCEPTION: &str = "tca.onException";
+    /// Module -> central: put a node back to waiting so it is handled again
+    /// ([`super::Retry`]).
+    pub const RETRY: &str = "tca.retry";
 }
 
 /// Name of the pseudo-module central uses as sender of its own messages.
@@ -133,6 +139,23 @@ pub struct Cancel {
 /// Kill a node and its subtree (a root kills the whole tree).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Kill {
+    /// The node.
+    pub node: NodeId,
+}
+
+/// Attach the sending module as the handler of exception `name` raised at `node` or below.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct OnException {
+    /// The node.
+    pub node: NodeId,
+    /// The exception name (registered by the sender, class exception).
+    pub name: MessageName,
+}
+
+/// Put a node whose failure is held by an exception (or whose handler has finished) back to
+/// waiting, so it is delivered again.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Retry {
     /// The node.
     pub node: NodeId,
 }

@@ -153,6 +153,7 @@ impl Central {
         }
         self.fail_queries_of(&module, out);
         self.requeue_tasks_of(&module, out);
+        self.requeue_exceptions_of(&module);
     }
 
     pub(super) fn log_link(

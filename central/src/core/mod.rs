@@ -14,6 +14,7 @@
 //! - `tree`: the adapter to `tca-task-tree`.
 
 mod event;
+mod exceptions;
 mod links;
 mod registry;
 mod routing;
@@ -56,6 +57,8 @@ pub struct Central {
     tasks: HashMap<MessageId, Task>,
     node_task: HashMap<u64, MessageId>,
     tree: Tree,
+    attachments: exceptions::Attachments,
+    exceptions: HashMap<MessageId, exceptions::OpenException>,
     central_name: ModuleName,
     seq: u32,
     now: u64,
@@ -109,6 +112,8 @@ impl Central {
             tasks: HashMap::new(),
             node_task: HashMap::new(),
             tree: Tree::default(),
+            attachments: HashMap::new(),
+            exceptions: HashMap::new(),
             central_name: ModuleName::new(CENTRAL).unwrap_or_else(|_| unreachable!()),
             seq: 0,
             now: 0,
@@ -214,9 +219,8 @@ impl Central {
             return self.send_error(link, &envelope, RouteError::BadFrame { reason }, out);
         }
         match envelope.class {
-            Class::Query | Class::Inform | Class::Exception => {
-                self.route_by_name(link, module, envelope, out)
-            }
+            Class::Query | Class::Inform => self.route_by_name(link, module, envelope, out),
+            Class::Exception => self.raise(link, module, envelope, out),
             Class::Goal | Class::Command => self.new_task(link, module, envelope, out),
             Class::Reply => self.answer_query(link, module, envelope, out),
             Class::Success | Class::Failure => self.handler_done(link, module, envelope, out),

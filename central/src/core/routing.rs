@@ -178,6 +178,16 @@ impl Central {
                     out,
                 ),
             },
+            names::ON_EXCEPTION => match self.attach_exception_handler(&module, &envelope) {
+                Ok(()) => self.reply_control(link, &envelope, &(), out),
+                Err(reason) => {
+                    self.send_error(link, &envelope, RouteError::Refused { reason }, out)
+                }
+            },
+            names::RETRY => match self.retry_node(&envelope, out) {
+                Ok(()) => self.reply_control(link, &envelope, &(), out),
+                Err(reason) => self.send_error(link, &envelope, RouteError::Tree { reason }, out),
+            },
             names::CONSTRAIN => match decode_data::<Constrain>(&envelope.data) {
                 Ok(c) => match self.add_constraint(c.constraint, None, Some(envelope.id), out) {
                     Ok(()) => self.reply_control(link, &envelope, &(), out),
@@ -197,12 +207,14 @@ impl Central {
             other => {
                 let reason = format!(
                     "unknown control message {other:?}; this central understands {}, {}, {}, \
-                     {}, {} and {}",
+                     {}, {}, {}, {} and {}",
                     names::REGISTER,
                     names::REGISTRY,
                     names::TREE,
                     names::KILL,
                     names::CONSTRAIN,
+                    names::ON_EXCEPTION,
+                    names::RETRY,
                     names::BYE
                 );
                 self.send_error(link, &envelope, RouteError::Refused { reason }, out)

@@ -30,6 +30,8 @@ pub(super) struct Task {
     pub(super) ready_since: u64,
     /// Whether it is a root (no parent).
     pub(super) root: bool,
+    /// Why it was killed, when that is a failure (an unhandled exception).
+    pub(super) failure: Option<String>,
 }
 
 impl Central {
@@ -98,6 +100,7 @@ impl Central {
                 running: false,
                 ready_since: self.now,
                 root: parent.is_none(),
+                failure: None,
             },
         );
         self.node_task.insert(node, id);
@@ -198,6 +201,9 @@ impl Central {
         };
         if self.queries.contains_key(&id) && envelope.class == Class::Failure {
             return self.forward_answer(link, module, id, envelope, out);
+        }
+        if self.exceptions.contains_key(&id) {
+            return self.exception_done(module, id, envelope.class == Class::Success, out);
         }
         let Some(task) = self.tasks.get(&id) else {
             let reason = format!("{} ends {id}, which is not a live task", envelope.class);
@@ -360,6 +366,7 @@ impl Central {
                     if let Some(id) = self.node_task.remove(&node) {
                         self.tasks.remove(&id);
                     }
+                    self.forget_node(node);
                 }
             }
         }
@@ -407,6 +414,10 @@ impl Central {
         };
         let Some(task) = self.tasks.get(&id) else {
             return;
+        };
+        let outcome = match (&task.failure, outcome) {
+            (Some(reason), TaskOutcome::Killed) => TaskOutcome::Failed(reason.clone()),
+            (_, o) => o,
         };
         let tell = task.notify || (task.root && !matches!(outcome, TaskOutcome::Achieved));
         if !tell {

@@ -5,7 +5,7 @@ use std::time::Duration;
 use bytes::Bytes;
 use serde::{Deserialize, Serialize};
 use tca_messages::control::{
-    Hello, Register, RegisterOutcome, Registration, TaskEnded, TaskOutcome, Welcome, names,
+    self, Hello, Register, RegisterOutcome, Registration, TaskEnded, TaskOutcome, Welcome, names,
 };
 use tca_messages::*;
 
@@ -437,4 +437,185 @@ fn forged_sender_and_ids_are_refused() {
     wrong_id.id = MessageId::new(1, 99);
     let err = error_of(&h.send(2, &wrong_id)[0].1);
     assert!(err.to_string().contains("link's number"), "{err}");
+}
+
+#[derive(Serialize, Deserialize)]
+struct Failed {
+    why: String,
+}
+
+/// Sends a task in the context of `context` and returns what central sent.
+fn task(
+    h: &mut Harness,
+    link: LinkId,
+    module: &str,
+    class: Class,
+    name: &str,
+    context: Option<NodeId>,
+    notify: bool,
+) -> (Envelope, Vec<(LinkId, Envelope)>) {
+    let mut e = h.envelope(link, module, class, name, target(1.0));
+    e.context = context;
+    e.options.notify = notify;
+    let sent = h.send(link, &e);
+    (e, sent)
+}
+
+fn control_msg<T: Serialize>(
+    h: &mut Harness,
+    link: LinkId,
+    module: &str,
+    name: &str,
+    body: &T,
+) -> Vec<(LinkId, Envelope)> {
+    let e = h.envelope(
+        link,
+        module,
+        Class::Control,
+        name,
+        encode_data(body).unwrap(),
+    );
+    h.send(link, &e)
+}
+
+#[test]
+fn an_exception_handled_two_levels_up_patches_the_plan_and_the_tree_completes() {
+    let mut h = Harness::new();
+    h.connect(1, "user", 1);
+    h.connect(2, "gait", 4);
+    h.connect(3, "lrp", 4);
+    h.connect(4, "ctl", 1);
+    h.register::<Target>(2, "gait", "walk", Class::Goal, false);
+    h.register::<Failed>(2, "gait", "moveFailed", Class::Exception, false);
+    h.register::<Target>(3, "lrp", "step", Class::Goal, false);
+    h.register::<Target>(4, "ctl", "legMove", Class::Command, false);
+
+    // user -> walk (W); gait attaches its exception handler at W and sends step S.
+    let (walk, sent) = task(&mut h, 1, "user", Class::Goal, "walk", None, true);
+    let w = sent[0].1.node.unwrap();
+    let sent = control_msg(
+        &mut h,
+        2,
+        "gait",
+        names::ON_EXCEPTION,
+        &control::OnException {
+            node: w,
+            name: MessageName::new("moveFailed").unwrap(),
+        },
+    );
+    assert_eq!(sent[0].1.class, Class::Reply, "{:?}", sent[0].1);
+    let (_step, sent) = task(&mut h, 2, "gait", Class::Goal, "step", Some(w), false);
+    let s = sent[0].1.node.unwrap();
+    h.done(2, "gait", &walk, true); // the walk handler is done planning
+    // lrp -> legMove (C) under S; the controller fails it with an exception.
+    let (leg, sent) = task(&mut h, 3, "lrp", Class::Command, "legMove", Some(s), false);
+    let c = sent[0].1.node.unwrap();
+    let mut exc = h.envelope(
+        4,
+        "ctl",
+        Class::Exception,
+        "moveFailed",
+        encode_data(&Failed {
+            why: "hit a box".into(),
+        })
+        .unwrap(),
+    );
+    exc.context = Some(c);
+    let sent = h.send(4, &exc);
+    let delivered = &sent
+        .iter()
+        .find(|(l, _)| *l == 2)
+        .expect("delivered to gait")
+        .1;
+    assert_eq!(
+        delivered.node,
+        Some(w),
+        "delivered at the node it was attached to"
+    );
+    assert_eq!(delivered.context, Some(c), "context names the raising node");
+    // The command then fails; its failure is held while the exception is handled.
+    let sent = h.done(4, "ctl", &leg, false);
+    assert!(
+        sent.iter()
+            .all(|(_, e)| e.name.as_str() != names::TASK_ENDED),
+        "nothing fails yet: {sent:?}"
+    );
+    // gait patches the plan: a new step under W, then kill the old one, end the exception.
+    let (step2, sent) = task(&mut h, 2, "gait", Class::Goal, "step", Some(w), false);
+    let s2 = sent[0].1.node.unwrap();
+    control_msg(&mut h, 2, "gait", names::KILL, &control::Kill { node: s });
+    let mut ok = h.envelope(
+        2,
+        "gait",
+        Class::Success,
+        "moveFailed",
+        encode_data(&()).unwrap(),
+    );
+    ok.correlation = Some(exc.id);
+    h.send(2, &ok);
+    // The new step runs to the end and the walk is achieved.
+    let (leg2, _) = task(&mut h, 3, "lrp", Class::Command, "legMove", Some(s2), false);
+    h.done(3, "lrp", &step2, true);
+    let sent = h.done(4, "ctl", &leg2, true);
+    let ended = sent
+        .iter()
+        .find(|(_, e)| e.name.as_str() == names::TASK_ENDED)
+        .expect("walk ended");
+    assert_eq!(ended.0, 1, "the user is told");
+    let ended: TaskEnded = decode_data(&ended.1.data).unwrap();
+    assert_eq!(ended.node, w);
+    assert_eq!(ended.outcome, TaskOutcome::Achieved);
+}
+
+#[test]
+fn an_unhandled_exception_fails_the_tree_and_its_originator_is_told() {
+    let mut h = Harness::new();
+    h.connect(1, "user", 1);
+    h.connect(2, "ctl", 1);
+    h.register::<Target>(2, "ctl", "legMove", Class::Command, false);
+    let (_cmd, sent) = task(&mut h, 1, "user", Class::Command, "legMove", None, false);
+    let c = sent[0].1.node.unwrap();
+    let mut exc = h.envelope(
+        2,
+        "ctl",
+        Class::Exception,
+        "hardwareFault",
+        encode_data(&Failed {
+            why: "limit switch".into(),
+        })
+        .unwrap(),
+    );
+    exc.context = Some(c);
+    let sent = h.send(2, &exc);
+    let cancel = sent
+        .iter()
+        .find(|(_, e)| e.name.as_str() == names::CANCEL)
+        .expect("running handler cancelled");
+    assert_eq!(cancel.0, 2);
+    let ended = sent
+        .iter()
+        .find(|(_, e)| e.name.as_str() == names::TASK_ENDED)
+        .expect("originator told");
+    assert_eq!(ended.0, 1);
+    let ended: TaskEnded = decode_data(&ended.1.data).unwrap();
+    match ended.outcome {
+        TaskOutcome::Failed(reason) => assert!(
+            reason.contains("unhandled exception hardwareFault"),
+            "{reason}"
+        ),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(h.central.live_nodes(), 0);
+}
+
+#[test]
+fn an_exception_outside_a_task_is_refused() {
+    let mut h = Harness::new();
+    h.connect(1, "ctl", 1);
+    let exc = h.envelope(1, "ctl", Class::Exception, "moveFailed", vec![]);
+    let err = error_of(&h.send(1, &exc)[0].1);
+    assert!(
+        err.to_string().contains("outside a live task node"),
+        "{err}"
+    );
 }

@@ -216,6 +216,43 @@ impl Tree {
         )
     }
 
+    pub(super) fn ancestors(&self, node: u64) -> impl Iterator<Item = u64> + '_ {
+        self.tree.ancestors(NodeId(node)).map(|n| n.0)
+    }
+
+    pub(super) fn suspend(
+        &mut self,
+        node: u64,
+        now: u64,
+        cause: Option<u64>,
+        out: &mut Vec<Action>,
+    ) -> Result<Vec<TreeEvent>, String> {
+        let node = NodeId(node);
+        self.apply(TreeOp::Suspend { node, now }, cause, now, out)
+    }
+
+    pub(super) fn resume(
+        &mut self,
+        node: u64,
+        now: u64,
+        cause: Option<u64>,
+        out: &mut Vec<Action>,
+    ) -> Result<Vec<TreeEvent>, String> {
+        let node = NodeId(node);
+        self.apply(TreeOp::Resume { node, now }, cause, now, out)
+    }
+
+    pub(super) fn retry(
+        &mut self,
+        node: u64,
+        now: u64,
+        cause: Option<u64>,
+        out: &mut Vec<Action>,
+    ) -> Result<Vec<TreeEvent>, String> {
+        let node = NodeId(node);
+        self.apply(TreeOp::Retry { node, now }, cause, now, out)
+    }
+
     /// Puts a node whose handler was running back to waiting, killing what its handler had
     /// created: used when the handler's module goes down, so the node is delivered again.
     /// Expressed as logged ops: suspend (so the failure is held, not propagated), finish with

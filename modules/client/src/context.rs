@@ -13,11 +13,22 @@ use crate::module::Module;
 pub struct Context {
     module: Module,
     redelivery: u32,
+    origin: Option<NodeId>,
 }
 
 impl Context {
-    pub(crate) fn new(module: Module, redelivery: u32) -> Self {
-        Context { module, redelivery }
+    pub(crate) fn new(module: Module, redelivery: u32, origin: Option<NodeId>) -> Self {
+        Context {
+            module,
+            redelivery,
+            origin,
+        }
+    }
+
+    /// The sender's task node when the message was sent; for an exception, the node that
+    /// raised it.
+    pub fn origin(&self) -> Option<NodeId> {
+        self.origin
     }
 
     /// The task node being handled (goals and commands), if any.

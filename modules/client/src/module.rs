@@ -9,7 +9,7 @@ use bytes::Bytes;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use tca_messages::control::{
-    Cancel, Constrain, Kill, Registry, TaskEnded, TaskOutcome, TreeView, names,
+    Cancel, Constrain, Kill, OnException, Registry, Retry, TaskEnded, TaskOutcome, TreeView, names,
 };
 use tca_messages::{
     Class, ConstraintSpec, Envelope, Failure, Message, MessageId, MessageName, ModuleName, NodeId,
@@ -235,6 +235,22 @@ impl Module {
         self.control(names::KILL, &Kill { node }).await
     }
 
+    /// Attaches this module as the handler of exception `E` raised at `node` or below (it must
+    /// have registered a handler for `E`). The handler gets the exception with its context's
+    /// node = `node` and [`Context::origin`](crate::Context::origin) = the raising node.
+    pub async fn on_exception<E: Message>(&self, node: NodeId) -> Result<()> {
+        expect_class::<E>(Class::Exception)?;
+        let name = MessageName::new(E::NAME).map_err(|e| ModuleError::Usage(e.to_string()))?;
+        self.control(names::ON_EXCEPTION, &OnException { node, name })
+            .await
+    }
+
+    /// Puts a node back to waiting so it is delivered again (in an exception handler: after
+    /// the raising node failed).
+    pub async fn retry(&self, node: NodeId) -> Result<()> {
+        self.control(names::RETRY, &Retry { node }).await
+    }
+
     /// Adds a temporal constraint between existing tasks.
     pub async fn constrain(&self, constraint: ConstraintSpec) -> Result<()> {
         self.control(names::CONSTRAIN, &Constrain { constraint })
@@ -445,7 +461,7 @@ impl Module {
             return;
         };
         let node = envelope.node;
-        let ctx = Context::new(self.in_context(node), envelope.redelivery);
+        let ctx = Context::new(self.in_context(node), envelope.redelivery, envelope.context);
         let module = self.clone();
         let call = entry.call.clone();
         let data = envelope.data.clone();
