@@ -8,7 +8,9 @@
 //!   handler runs for);
 //! - the exception is delivered with `node` = the node it was attached at and `context` = the
 //!   node that raised it; the handler may kill or retry nodes, add nodes (send goals in the
-//!   context of the attachment node: patching the plan), then ends the exception with
+//!   context of the attachment node: patching the plan; add new nodes *before* killing the
+//!   failed ones, or a parent left with no unfinished child is achieved at once), then ends the
+//!   exception with
 //!   **success** (handled: dispatch resumes; a failure of the raising node that was held during
 //!   the exception now propagates unless the handler killed or retried it) or **failure** (pass
 //!   it up: the search goes on above the attachment node);
