@@ -28,5 +28,5 @@ pub use record::{
     Direction, FrameRecord, LinkEvent, LinkRecord, LogRecord, ProblemRecord, RecordKind,
     RegisteredRecord, TreeRecord,
 };
-pub use show::{ShowFilter, render};
+pub use show::{ShowFilter, render, tree_at};
 pub use writer::{FLUSH_INTERVAL, LogSink, LogWriter};

@@ -144,3 +144,27 @@ pub fn render(log: &LogFile, filter: &ShowFilter) -> Vec<String> {
     }
     lines
 }
+
+/// Rebuilds the task trees as they stood `at_s` seconds after the log's first record (the end
+/// of the log if `None`) by replaying the logged tree operations, and renders them.
+pub fn tree_at(log: &LogFile, at_s: Option<f64>) -> Result<String, String> {
+    let start = log.records.first().map_or(0, |r| r.at_ns);
+    let limit = at_s.map(|s| start.saturating_add((s.max(0.0) * 1e9) as u64));
+    let ops = log.records.iter().filter_map(|r| match &r.kind {
+        RecordKind::Tree(t) if limit.is_none_or(|l| r.at_ns <= l) => Some(&t.op),
+        _ => None,
+    });
+    let mut tree = tca_task_tree::TaskTree::new();
+    let mut applied = 0usize;
+    for op in ops {
+        tree.apply(op)
+            .map_err(|e| format!("the log's tree operations do not replay (op {applied}): {e}"))?;
+        applied += 1;
+    }
+    let text = tree.render_text();
+    Ok(if text.trim().is_empty() {
+        format!("(no live task nodes; {applied} tree operations replayed)")
+    } else {
+        text
+    })
+}

@@ -41,6 +41,8 @@ pub mod names {
     /// Module -> central: put a node back to waiting so it is handled again
     /// ([`super::Retry`]).
     pub const RETRY: &str = "tca.retry";
+    /// Module -> central: monitor a node with a condition query ([`super::Monitor`]).
+    pub const MONITOR: &str = "tca.monitor";
 }
 
 /// Name of the pseudo-module central uses as sender of its own messages.
@@ -158,6 +160,45 @@ pub struct OnException {
 pub struct Retry {
     /// The node.
     pub node: NodeId,
+}
+
+/// What a monitor does when its condition holds.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum MonitorAction {
+    /// Raise this exception in the monitored node's context.
+    Raise {
+        /// Exception name.
+        name: MessageName,
+        /// Its data (postcard).
+        data: Vec<u8>,
+    },
+    /// Send this goal, command or inform (goals and commands become children of the node).
+    Send {
+        /// Class (goal, command or inform).
+        class: Class,
+        /// Message name.
+        name: MessageName,
+        /// Its data (postcard).
+        data: Vec<u8>,
+    },
+}
+
+/// TCA execution monitoring: a condition query checked once when a node starts (point
+/// monitor, `period_ms: None`) or every `period_ms` while it is active (polling monitor).
+/// The query's reply must be a `bool`; `true` triggers the action, once. The monitor ends
+/// with its node.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Monitor {
+    /// The monitored node.
+    pub node: NodeId,
+    /// The condition: a registered query whose reply is `bool`.
+    pub query: MessageName,
+    /// The query's data (postcard).
+    pub query_data: Vec<u8>,
+    /// Polling period in milliseconds; `None` for a point monitor.
+    pub period_ms: Option<u64>,
+    /// What to do when the condition holds.
+    pub action: MonitorAction,
 }
 
 /// Add a temporal constraint between existing nodes.

@@ -31,6 +31,12 @@ pub(crate) struct ShowArgs {
     /// Print every frame in both directions.
     #[arg(long)]
     all: bool,
+    /// Print the task trees instead, rebuilt from the logged tree operations.
+    #[arg(long)]
+    tree: bool,
+    /// With --tree: as they stood this many seconds after the log's start (default: the end).
+    #[arg(long, value_name = "SECONDS", requires = "tree")]
+    at: Option<f64>,
 }
 
 pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
@@ -38,6 +44,14 @@ pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
         LogCommand::Show(args) => {
             let log = LogFile::open(&args.file)
                 .with_context(|| format!("cannot read log {}", args.file.display()))?;
+            if args.tree {
+                let text = tca_logs::tree_at(&log, args.at).map_err(anyhow::Error::msg)?;
+                println!("{text}");
+                if let Some(t) = &log.truncated {
+                    println!("(note: {t})");
+                }
+                return Ok(ExitCode::SUCCESS);
+            }
             let filter = ShowFilter {
                 module: args.module,
                 name: args.name,

@@ -5,6 +5,7 @@ mod log;
 mod module;
 mod ping;
 mod registry;
+mod tree;
 mod up;
 
 use std::process::ExitCode;
@@ -32,6 +33,8 @@ enum Command {
     Ping(ping::PingArgs),
     /// Print the registry: every registered message, its handler and data format.
     Registry(registry::RegistryArgs),
+    /// Print the live task trees of a running central.
+    Tree(tree::TreeArgs),
     /// Read traffic logs.
     #[command(subcommand)]
     Log(log::LogCommand),
@@ -86,6 +89,7 @@ pub(crate) fn main() -> ExitCode {
             Command::Up(args) => up::run(args).await,
             Command::Ping(args) => ping::run(args).await,
             Command::Registry(args) => registry::run(args).await,
+            Command::Tree(args) => tree::run(args).await,
             Command::Log(cmd) => log::run(cmd).await,
         }
     });

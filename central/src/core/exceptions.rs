@@ -62,8 +62,14 @@ impl Central {
             );
             return self.send_error(link, &envelope, RouteError::Refused { reason }, out);
         };
+        let _ = module;
+        self.raise_internal(envelope, node, out);
+    }
+
+    /// Suspends the raising node and routes the exception (also used by monitors).
+    pub(super) fn raise_internal(&mut self, envelope: Envelope, node: u64, out: &mut Vec<Action>) {
         if let Err(reason) = self.tree.suspend(node, self.now, Some(envelope.id.0), out) {
-            self.problem(Some(link), Some(module), reason, &[], out);
+            self.problem(None, Some(envelope.sender.clone()), reason, &[], out);
         }
         tracing::info!(exception = %envelope.name, node, "exception raised");
         self.route_exception(envelope, node, Some(node), out);

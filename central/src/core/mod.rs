@@ -16,6 +16,7 @@
 mod event;
 mod exceptions;
 mod links;
+mod monitors;
 mod registry;
 mod routing;
 mod tasks;
@@ -59,6 +60,7 @@ pub struct Central {
     tree: Tree,
     attachments: exceptions::Attachments,
     exceptions: HashMap<MessageId, exceptions::OpenException>,
+    monitors: Vec<monitors::MonitorState>,
     central_name: ModuleName,
     seq: u32,
     now: u64,
@@ -114,6 +116,7 @@ impl Central {
             tree: Tree::default(),
             attachments: HashMap::new(),
             exceptions: HashMap::new(),
+            monitors: Vec::new(),
             central_name: ModuleName::new(CENTRAL).unwrap_or_else(|_| unreachable!()),
             seq: 0,
             now: 0,
@@ -139,13 +142,19 @@ impl Central {
             Event::Opened(link) => self.link_opened(link, out),
             Event::Frame(link, frame) => self.frame(link, frame, out),
             Event::Closed(link) => self.link_closed(link, out),
-            Event::Tick => self.expire_waiting(out),
+            Event::Tick => {
+                self.expire_waiting(out);
+                self.poll_monitors(out);
+            }
         }
     }
 
     /// When the core next needs a [`Event::Tick`], if ever.
     pub fn next_deadline(&self) -> Option<u64> {
-        self.earliest_expiry()
+        match (self.earliest_expiry(), self.next_poll()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
     }
 
     /// Connected module names, sorted.

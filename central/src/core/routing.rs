@@ -101,6 +101,9 @@ impl Central {
         let Some(q) = self.queries.remove(&query_id) else {
             return;
         };
+        if self.is_central(&q.asker) {
+            return self.monitor_answer(query_id, envelope, out);
+        }
         if let Some(asker_link) = self.modules.get(&q.asker).and_then(|m| m.link) {
             self.send(asker_link, &envelope, out);
         }
@@ -184,6 +187,12 @@ impl Central {
                     self.send_error(link, &envelope, RouteError::Refused { reason }, out)
                 }
             },
+            names::MONITOR => match self.add_monitor(&module, &envelope, out) {
+                Ok(()) => self.reply_control(link, &envelope, &(), out),
+                Err(reason) => {
+                    self.send_error(link, &envelope, RouteError::Refused { reason }, out)
+                }
+            },
             names::RETRY => match self.retry_node(&envelope, out) {
                 Ok(()) => self.reply_control(link, &envelope, &(), out),
                 Err(reason) => self.send_error(link, &envelope, RouteError::Tree { reason }, out),
@@ -207,7 +216,7 @@ impl Central {
             other => {
                 let reason = format!(
                     "unknown control message {other:?}; this central understands {}, {}, {}, \
-                     {}, {}, {}, {} and {}",
+                     {}, {}, {}, {}, {} and {}",
                     names::REGISTER,
                     names::REGISTRY,
                     names::TREE,
@@ -215,6 +224,7 @@ impl Central {
                     names::CONSTRAIN,
                     names::ON_EXCEPTION,
                     names::RETRY,
+                    names::MONITOR,
                     names::BYE
                 );
                 self.send_error(link, &envelope, RouteError::Refused { reason }, out)

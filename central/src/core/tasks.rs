@@ -282,6 +282,7 @@ impl Central {
             }
             self.send(link, &envelope, out);
             self.tree_events(events, out);
+            self.monitors_node_started(node, out);
         }
     }
 
@@ -353,12 +354,16 @@ impl Central {
                         touched.push(handler);
                     }
                 }
-                TreeEvent::Achieved(node) => self.task_ended(node, TaskOutcome::Achieved, out),
+                TreeEvent::Achieved(node) => {
+                    self.monitors_node_ended(node);
+                    self.task_ended(node, TaskOutcome::Achieved, out)
+                }
                 TreeEvent::Failed(node, reason) => {
                     self.task_ended(node, TaskOutcome::Failed(reason), out);
                 }
                 TreeEvent::Cancel(node) => self.stop_running(node, &mut touched, out),
                 TreeEvent::Killed(node) => {
+                    self.monitors_node_ended(node);
                     self.stop_running(node, &mut touched, out);
                     self.task_ended(node, TaskOutcome::Killed, out);
                 }
@@ -367,6 +372,7 @@ impl Central {
                         self.tasks.remove(&id);
                     }
                     self.forget_node(node);
+                    self.monitors_node_ended(node);
                 }
             }
         }

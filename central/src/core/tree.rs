@@ -216,6 +216,13 @@ impl Tree {
         )
     }
 
+    /// Whether the node's handler has started (it is past waiting).
+    pub(super) fn has_started(&self, node: u64) -> bool {
+        self.tree
+            .get(NodeId(node))
+            .is_some_and(|v| v.time(Point::HandlingStart).is_some())
+    }
+
     pub(super) fn ancestors(&self, node: u64) -> impl Iterator<Item = u64> + '_ {
         self.tree.ancestors(NodeId(node)).map(|n| n.0)
     }

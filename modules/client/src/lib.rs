@@ -46,5 +46,6 @@ pub use builder::ModuleBuilder;
 pub use connector::Connector;
 pub use context::Context;
 pub use error::{HandlerError, ModuleError, Result};
-pub use module::{DEFAULT_QUERY_TIMEOUT, Module, Task};
+pub use module::{DEFAULT_QUERY_TIMEOUT, Module, Task, raise_action, send_action};
+pub use tca_messages::control::MonitorAction;
 pub use tca_messages::{self as messages, ConstraintSpec, SendOptions, TaskRef};

@@ -9,7 +9,8 @@ use bytes::Bytes;
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 use tca_messages::control::{
-    Cancel, Constrain, Kill, OnException, Registry, Retry, TaskEnded, TaskOutcome, TreeView, names,
+    Cancel, Constrain, Kill, Monitor, MonitorAction, OnException, Registry, Retry, TaskEnded,
+    TaskOutcome, TreeView, names,
 };
 use tca_messages::{
     Class, ConstraintSpec, Envelope, Failure, Message, MessageId, MessageName, ModuleName, NodeId,
@@ -249,6 +250,48 @@ impl Module {
     /// the raising node failed).
     pub async fn retry(&self, node: NodeId) -> Result<()> {
         self.control(names::RETRY, &Retry { node }).await
+    }
+
+    /// Installs a point monitor on `node`: when its handler starts, central asks `condition`
+    /// (a query answering `bool`) once; `true` triggers `action`.
+    pub async fn point_monitor<Q: Message<Reply = bool>>(
+        &self,
+        node: NodeId,
+        condition: &Q,
+        action: MonitorAction,
+    ) -> Result<()> {
+        self.monitor(node, condition, None, action).await
+    }
+
+    /// Installs a polling monitor on `node`: while it is active, central asks `condition` every
+    /// `period`; the first `true` triggers `action`. It ends with the node.
+    pub async fn polling_monitor<Q: Message<Reply = bool>>(
+        &self,
+        node: NodeId,
+        condition: &Q,
+        period: Duration,
+        action: MonitorAction,
+    ) -> Result<()> {
+        let period_ms = u64::try_from(period.as_millis()).unwrap_or(u64::MAX).max(1);
+        self.monitor(node, condition, Some(period_ms), action).await
+    }
+
+    async fn monitor<Q: Message<Reply = bool>>(
+        &self,
+        node: NodeId,
+        condition: &Q,
+        period_ms: Option<u64>,
+        action: MonitorAction,
+    ) -> Result<()> {
+        expect_class::<Q>(Class::Query)?;
+        let monitor = Monitor {
+            node,
+            query: MessageName::new(Q::NAME).map_err(|e| ModuleError::Usage(e.to_string()))?,
+            query_data: encode_data(condition)?,
+            period_ms,
+            action,
+        };
+        self.control(names::MONITOR, &monitor).await
     }
 
     /// Adds a temporal constraint between existing tasks.
@@ -541,4 +584,30 @@ fn expect_class<M: Message>(class: Class) -> Result<()> {
 
 pub(crate) fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// A monitor action raising exception `exception` in the monitored node's context.
+pub fn raise_action<E: Message>(exception: &E) -> Result<MonitorAction> {
+    expect_class::<E>(Class::Exception)?;
+    Ok(MonitorAction::Raise {
+        name: MessageName::new(E::NAME).map_err(|e| ModuleError::Usage(e.to_string()))?,
+        data: encode_data(exception)?,
+    })
+}
+
+/// A monitor action sending `message` (a goal, command or inform; goals and commands become
+/// children of the monitored node).
+pub fn send_action<M: Message>(message: &M) -> Result<MonitorAction> {
+    if !matches!(M::CLASS, Class::Goal | Class::Command | Class::Inform) {
+        return Err(ModuleError::Usage(format!(
+            "a monitor may send a goal, command or inform; {} is a {}",
+            M::NAME,
+            M::CLASS
+        )));
+    }
+    Ok(MonitorAction::Send {
+        class: M::CLASS,
+        name: MessageName::new(M::NAME).map_err(|e| ModuleError::Usage(e.to_string()))?,
+        data: encode_data(message)?,
+    })
 }
