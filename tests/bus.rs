@@ -274,6 +274,20 @@ async fn messages_wait_for_a_crashed_module_and_reach_it_when_it_returns() {
         };
         assert_eq!(pinger.query(&ping).await.unwrap(), ping);
         first.abort_link();
+        within("central notices the crash", async {
+            loop {
+                let registry = pinger.registry().await.unwrap();
+                if registry
+                    .entries
+                    .iter()
+                    .any(|e| e.name.as_str() == "tca-ping" && !e.connected)
+                {
+                    break;
+                }
+                tokio::time::sleep(Duration::from_millis(20)).await;
+            }
+        })
+        .await;
         // Sent while the echo is down: held by central.
         let waiting = {
             let pinger = pinger.clone();
@@ -324,6 +338,21 @@ async fn a_module_process_killed_and_restarted_still_gets_what_waited() {
     .await;
     assert_eq!(pong, first);
     echo_proc.kill();
+    // Wait until central has noticed (zenoh withdraws the module's liveliness token).
+    within("central notices the kill", async {
+        loop {
+            let registry = pinger.registry().await.unwrap();
+            if registry
+                .entries
+                .iter()
+                .any(|e| e.name.as_str() == "tca-ping" && !e.connected)
+            {
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(50)).await;
+        }
+    })
+    .await;
     let waiting = {
         let pinger = pinger.clone();
         tokio::spawn(async move {

@@ -1,6 +1,8 @@
 //! Writing records into an MCAP file, and the background sink central uses.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
+
+use rustc_hash::FxHashMap as HashMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
@@ -32,6 +34,8 @@ pub struct LogWriter {
     frame_channels: HashMap<(MessageName, u32), u16>,
     record_channels: HashMap<&'static str, u16>,
     sequence: u32,
+    /// Reused encoding buffer.
+    buffer: Vec<u8>,
 }
 
 impl LogWriter {
@@ -50,15 +54,19 @@ impl LogWriter {
             .library(concat!("tca-logs ", env!("CARGO_PKG_VERSION")))
             .compression(None)
             .chunk_size(Some(256 * 1024))
+            // No CRCs: the reader does not check them, and they cost as much as the writing.
+            .calculate_chunk_crcs(false)
+            .calculate_data_section_crc(false)
             .create(BufWriter::with_capacity(256 * 1024, file))
             .map_err(|e| LogError::Write(e.to_string()))?;
         Ok(LogWriter {
             path: path.to_owned(),
             mcap,
-            formats: HashMap::new(),
-            frame_channels: HashMap::new(),
-            record_channels: HashMap::new(),
+            formats: HashMap::default(),
+            frame_channels: HashMap::default(),
+            record_channels: HashMap::default(),
             sequence: 0,
+            buffer: Vec::with_capacity(4096),
         })
     }
 
@@ -72,8 +80,14 @@ impl LogWriter {
         match &record.kind {
             RecordKind::Frame(f) => {
                 let channel = self.frame_channel(&f.name)?;
-                let data = postcard::to_allocvec(f).map_err(|e| LogError::Write(e.to_string()))?;
-                self.write(channel, record.at_ns, &data)
+                let mut data = std::mem::take(&mut self.buffer);
+                data.clear();
+                let result = match postcard::to_io(f, &mut data) {
+                    Ok(_) => self.write(channel, record.at_ns, &data),
+                    Err(e) => Err(LogError::Write(e.to_string())),
+                };
+                self.buffer = data;
+                result
             }
             RecordKind::Registered(r) => {
                 self.note_registration(&r.registration);
@@ -140,8 +154,14 @@ impl LogWriter {
                 c
             }
         };
-        let data = postcard::to_allocvec(value).map_err(|e| LogError::Write(e.to_string()))?;
-        self.write(channel, at_ns, &data)
+        let mut data = std::mem::take(&mut self.buffer);
+        data.clear();
+        let result = match postcard::to_io(value, &mut data) {
+            Ok(_) => self.write(channel, at_ns, &data),
+            Err(e) => Err(LogError::Write(e.to_string())),
+        };
+        self.buffer = data;
+        result
     }
 
     fn note_registration(&mut self, reg: &Registration) {

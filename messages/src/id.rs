@@ -35,16 +35,25 @@ fn check_name(kind: &'static str, name: &str) -> Result<(), NameError> {
 macro_rules! name_type {
     ($(#[$doc:meta])* $ty:ident, $kind:literal) => {
         $(#[$doc])*
-        #[derive(Clone, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
-        #[serde(transparent)]
-        pub struct $ty(String);
+        #[derive(Clone, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        pub struct $ty(std::sync::Arc<str>);
+
+        impl Serialize for $ty {
+            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                s.serialize_str(&self.0)
+            }
+        }
 
         impl $ty {
             /// Validates `name`: 1 to 128 ASCII letters, digits, `_`, `-` or `.`.
             pub fn new(name: impl Into<String>) -> Result<Self, NameError> {
                 let name = name.into();
-                check_name($kind, &name)?;
-                Ok(Self(name))
+                Self::from_checked(&name)
+            }
+
+            fn from_checked(name: &str) -> Result<Self, NameError> {
+                check_name($kind, name)?;
+                Ok(Self(std::sync::Arc::from(name)))
             }
 
             /// The name as a string slice.
@@ -80,12 +89,21 @@ macro_rules! name_type {
 
         impl<'de> Deserialize<'de> for $ty {
             fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-                let s = String::deserialize(d)?;
-                Self::new(s).map_err(|e| {
-                    let text = e.to_string();
-                    crate::error::note_custom(&text);
-                    serde::de::Error::custom(text)
-                })
+                struct V;
+                impl serde::de::Visitor<'_> for V {
+                    type Value = $ty;
+                    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                        write!(f, "a {}", $kind)
+                    }
+                    fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<$ty, E> {
+                        $ty::from_checked(v).map_err(|e| {
+                            let text = e.to_string();
+                            crate::error::note_custom(&text);
+                            E::custom(text)
+                        })
+                    }
+                }
+                d.deserialize_str(V)
             }
         }
     };

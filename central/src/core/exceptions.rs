@@ -17,7 +17,7 @@
 //! - nobody handles it up to the root: the whole tree is killed and its originator is told that
 //!   it failed, with the exception's name and reason.
 
-use std::collections::HashMap;
+use rustc_hash::FxHashMap as HashMap;
 
 use tca_messages::control::{OnException, Retry};
 use tca_messages::{Class, Envelope, MessageId, MessageName, ModuleName, RouteError, decode_data};

@@ -28,7 +28,9 @@ mod fuzz_tests;
 #[cfg(test)]
 mod tests;
 
-use std::collections::{BTreeMap, HashMap, VecDeque};
+use std::collections::{BTreeMap, VecDeque};
+
+use rustc_hash::FxHashMap as HashMap;
 
 use bytes::Bytes;
 use tca_logs::{Direction, FrameRecord, LogRecord, ProblemRecord, RecordKind};
@@ -55,7 +57,7 @@ pub struct Central {
     registry: BTreeMap<MessageName, Entry>,
     folded: HashMap<String, MessageName>,
     queries: HashMap<MessageId, OpenQuery>,
-    tasks: HashMap<MessageId, Task>,
+    tasks: HashMap<MessageId, Box<Task>>,
     node_task: HashMap<u64, MessageId>,
     tree: Tree,
     attachments: exceptions::Attachments,
@@ -106,16 +108,16 @@ impl Central {
     pub fn new(config: CentralConfig) -> Self {
         Central {
             config,
-            links: HashMap::new(),
-            modules: HashMap::new(),
+            links: HashMap::default(),
+            modules: HashMap::default(),
             registry: BTreeMap::new(),
-            folded: HashMap::new(),
-            queries: HashMap::new(),
-            tasks: HashMap::new(),
-            node_task: HashMap::new(),
+            folded: HashMap::default(),
+            queries: HashMap::default(),
+            tasks: HashMap::default(),
+            node_task: HashMap::default(),
             tree: Tree::default(),
-            attachments: HashMap::new(),
-            exceptions: HashMap::new(),
+            attachments: HashMap::default(),
+            exceptions: HashMap::default(),
             monitors: Vec::new(),
             central_name: ModuleName::new(CENTRAL).unwrap_or_else(|_| unreachable!()),
             seq: 0,

@@ -91,7 +91,7 @@ impl Central {
         let id = envelope.id;
         self.tasks.insert(
             id,
-            Task {
+            Box::new(Task {
                 notify: envelope.options.notify,
                 envelope,
                 node,
@@ -101,7 +101,7 @@ impl Central {
                 ready_since: self.now,
                 root: parent.is_none(),
                 failure: None,
-            },
+            }),
         );
         self.node_task.insert(node, id);
         self.tree_events(events, out);
@@ -268,19 +268,17 @@ impl Central {
                     continue;
                 }
             };
-            let mut envelope = match self.tasks.get_mut(&id) {
-                Some(t) => {
-                    t.running = true;
-                    t.envelope.node = Some(NodeId(node));
-                    t.envelope.clone()
-                }
-                None => continue,
-            };
-            envelope.node = Some(NodeId(node));
             if let Some(m) = self.modules.get_mut(module) {
                 m.running += 1;
             }
-            self.send(link, &envelope, out);
+            // Send the stored envelope with its node filled in, without copying it.
+            let Some(mut task) = self.tasks.remove(&id) else {
+                continue;
+            };
+            task.running = true;
+            task.envelope.node = Some(NodeId(node));
+            self.send(link, &task.envelope, out);
+            self.tasks.insert(id, task);
             self.tree_events(events, out);
             self.monitors_node_started(node, out);
         }
