@@ -65,14 +65,24 @@ const MOVE: Duration = Duration::from_millis(60);
 /// bodyMove). With `fail_step`, the controller fails that step's first leg move with an
 /// exception, which the gait planner handles at the walk node (two levels above the leg
 /// move's goal) by planning the step again.
-async fn figure5_modules(central: &TestCentral, fail_step: Option<u32>) -> Vec<Module> {
+/// Waits (wall clock) or spends (simulated clock) `d`.
+async fn work(ctx: &tca_module::Context, d: Duration) {
+    if ctx.simulated_time() {
+        ctx.spend(d * 1000); // simulated: 30 ms of planning stands for 30 s, and so on
+    } else {
+        tokio::time::sleep(d).await;
+    }
+}
+
+async fn figure5_modules(central: &TestCentral, fail_step: Option<u32>, sim: bool) -> Vec<Module> {
     let connector = &central.connector;
     let failed_once = Arc::new(AtomicU32::new(0));
     let controller = Module::builder("controller")
+        .simulated_time(sim)
         .handle(move |ctx, m: LegMove| {
             let failed_once = failed_once.clone();
             async move {
-                tokio::time::sleep(MOVE).await;
+                work(&ctx, MOVE).await;
                 if Some(m.step) == fail_step && failed_once.fetch_add(1, Ordering::SeqCst) == 0 {
                     ctx.raise(&MoveFailed { step: m.step })?;
                     return Err(HandlerError::new("leg struck an obstacle"));
@@ -80,8 +90,8 @@ async fn figure5_modules(central: &TestCentral, fail_step: Option<u32>) -> Vec<M
                 Ok(())
             }
         })
-        .handle(|_ctx, _m: BodyMove| async {
-            tokio::time::sleep(MOVE).await;
+        .handle(|ctx, _m: BodyMove| async move {
+            work(&ctx, MOVE).await;
             Ok(())
         })
         .connect(connector)
@@ -89,8 +99,9 @@ async fn figure5_modules(central: &TestCentral, fail_step: Option<u32>) -> Vec<M
         .unwrap();
     let lrp = Module::builder("lrp")
         .capacity(4)
+        .simulated_time(sim)
         .handle(|ctx, g: LegMoveGoal| async move {
-            tokio::time::sleep(PLAN).await;
+            work(&ctx, PLAN).await;
             ctx.command(&LegMove { step: g.step })?;
             Ok(())
         })
@@ -102,6 +113,7 @@ async fn figure5_modules(central: &TestCentral, fail_step: Option<u32>) -> Vec<M
     let steps_for_plan = steps.clone();
     let gait = Module::builder("gait")
         .capacity(4)
+        .simulated_time(sim)
         .handle(|ctx, w: Walk| async move {
             let walk_node = ctx.node().expect("a goal has a node");
             ctx.on_exception::<MoveFailed>(walk_node).await?;
@@ -120,7 +132,7 @@ async fn figure5_modules(central: &TestCentral, fail_step: Option<u32>) -> Vec<M
                     .lock()
                     .unwrap()
                     .insert(p.step, (ctx.node().unwrap(), p.clone()));
-                tokio::time::sleep(PLAN).await;
+                work(&ctx, PLAN).await;
                 // In concurrent mode the leg may not move before the previous body move ends.
                 let mut leg_options = SendOptions::default();
                 if let Some(prev) = p.previous_body_move {
@@ -234,6 +246,17 @@ impl Timeline {
 }
 
 async fn walk(concurrent: bool, fail_step: Option<u32>) -> (Timeline, tca_logs::LogFile, Duration) {
+    let (t, log, took, _) = walk_on(concurrent, fail_step, false).await;
+    (t, log, took)
+}
+
+/// Walks three steps; returns the timeline, the log, the wall time and the final time on the
+/// user's clock (simulated seconds when `sim`).
+async fn walk_on(
+    concurrent: bool,
+    fail_step: Option<u32>,
+    sim: bool,
+) -> (Timeline, tca_logs::LogFile, Duration, f64) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("walk.mcap");
     let central = TestCentral::start_with(
@@ -244,8 +267,9 @@ async fn walk(concurrent: bool, fail_step: Option<u32>) -> (Timeline, tca_logs::
         },
     )
     .await;
-    let _modules = figure5_modules(&central, fail_step).await;
+    let _modules = figure5_modules(&central, fail_step, sim).await;
     let user = Module::builder("user")
+        .simulated_time(sim)
         .connect(&central.connector)
         .await
         .unwrap();
@@ -264,10 +288,22 @@ async fn walk(concurrent: bool, fail_step: Option<u32>) -> (Timeline, tca_logs::
         .unwrap();
     let outcome = within("walk", task.outcome()).await.unwrap();
     let took = started.elapsed();
+    let clock_s = user.time_ns() as f64 / 1e9;
     assert_eq!(outcome, TaskOutcome::Achieved);
     central.stop().await;
     let log = tca_logs::LogFile::open(&path).unwrap();
-    (timeline(&log), log, took)
+    (timeline(&log), log, took, clock_s)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn simulated_time_shows_what_concurrency_saves() {
+    // Planning steps cost 30 s, moves 60 s of simulated time. Sequentially each step takes
+    // plan + leg plan + leg move + body move = 180 s; concurrently the next step is planned
+    // while this one moves, so after the first step only the moves are on the critical path.
+    let (_, _, _, sequential) = walk_on(false, None, true).await;
+    let (_, _, _, concurrent) = walk_on(true, None, true).await;
+    assert_eq!(sequential, 3.0 * 180.0);
+    assert_eq!(concurrent, 60.0 + 3.0 * 120.0);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -66,6 +66,10 @@ pub struct Central {
     central_name: ModuleName,
     seq: u32,
     now: u64,
+    /// Timestamp of the envelope being handled: what it releases (a task whose constraints or
+    /// capacity it satisfies) cannot have happened earlier on the sender's clock, which matters
+    /// when modules run on simulated time.
+    cause_stamp: u64,
     counters: Counters,
 }
 
@@ -122,6 +126,7 @@ impl Central {
             central_name: ModuleName::new(CENTRAL).unwrap_or_else(|_| unreachable!()),
             seq: 0,
             now: 0,
+            cause_stamp: 0,
             counters: Counters::default(),
         }
     }
@@ -208,6 +213,7 @@ impl Central {
                 return;
             }
         };
+        self.cause_stamp = envelope.timestamp_ns;
         self.log_frame(Direction::In, link, peer.clone(), &envelope, frame, out);
         let Some(module) = peer else {
             return self.before_hello(link, envelope, out);
@@ -271,7 +277,9 @@ impl Central {
             context: None,
             node: None,
             correlation,
-            timestamp_ns: self.now,
+            // On the clock of the message being handled, so central's answers never move a
+            // module's (possibly simulated) clock.
+            timestamp_ns: self.cause_stamp,
             options: SendOptions::default(),
             redelivery: 0,
             data,

@@ -277,6 +277,7 @@ impl Central {
             };
             task.running = true;
             task.envelope.node = Some(NodeId(node));
+            task.envelope.timestamp_ns = task.envelope.timestamp_ns.max(self.cause_stamp);
             self.send(link, &task.envelope, out);
             self.tasks.insert(id, task);
             self.tree_events(events, out);
@@ -435,12 +436,14 @@ impl Central {
             outcome,
         };
         let data = encode_data(&ended).unwrap_or_default();
-        let env = self.central_envelope(
+        let mut env = self.central_envelope(
             Class::Control,
             control_name(names::TASK_ENDED),
             Some(id),
             data,
         );
+        // On the clock of the message that ended it (simulated time for simulations).
+        env.timestamp_ns = self.cause_stamp;
         self.send(link, &env, out);
     }
 }

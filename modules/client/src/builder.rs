@@ -26,6 +26,7 @@ pub struct ModuleBuilder {
     query_timeout: Duration,
     max_frame_bytes: usize,
     replace: bool,
+    sim_time: bool,
     handlers: HashMap<MessageName, HandlerEntry>,
     error: Option<ModuleError>,
 }
@@ -39,6 +40,7 @@ impl Module {
             query_timeout: DEFAULT_QUERY_TIMEOUT,
             max_frame_bytes: DEFAULT_MAX_FRAME_BYTES,
             replace: false,
+            sim_time: false,
             handlers: HashMap::new(),
             error: None,
         }
@@ -62,6 +64,16 @@ impl ModuleBuilder {
     /// Largest frame this module sends.
     pub fn max_frame_bytes(mut self, bytes: usize) -> Self {
         self.max_frame_bytes = bytes;
+        self
+    }
+
+    /// Stamp messages with simulated time instead of the wall clock: each handler's clock
+    /// starts at the time its message was sent, follows the answers it receives and advances
+    /// by what it [`spend`](Module::spend)s. Modules of a simulation (a simulated controller
+    /// whose moves take simulated seconds) use it so that durations are comparable with the
+    /// real mechanism's while the simulation runs as fast as it can.
+    pub fn simulated_time(mut self, on: bool) -> Self {
+        self.sim_time = on;
         self
     }
 
@@ -173,6 +185,7 @@ impl ModuleBuilder {
             self.handlers,
             self.query_timeout,
             self.max_frame_bytes,
+            self.sim_time,
             link.keep,
         );
         tokio::spawn(Module::receive_loop(

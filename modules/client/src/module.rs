@@ -40,6 +40,10 @@ pub(crate) struct Shared {
     handlers: HashMap<MessageName, HandlerEntry>,
     pub(crate) query_timeout: Duration,
     closed: AtomicBool,
+    /// Stamp envelopes with simulated time (see [`Module::spend`]) instead of the wall clock.
+    sim_time: bool,
+    /// The module's simulated time: the latest any of its handlers reached, nanoseconds.
+    base_clock: std::sync::atomic::AtomicU64,
     closed_signal: tokio::sync::watch::Sender<bool>,
     /// Keeps the transport open while any handle lives (taken by [`Module::abort_link`]).
     keep: Mutex<Option<crate::connector::Keep>>,
@@ -52,6 +56,8 @@ pub struct Module {
     pub(crate) shared: Arc<Shared>,
     /// The task node messages sent through this handle are attached to.
     pub(crate) context: Option<NodeId>,
+    /// The running handler's simulated clock, when this handle belongs to one.
+    pub(crate) clock: Option<Arc<std::sync::atomic::AtomicU64>>,
 }
 
 impl std::fmt::Debug for Module {
@@ -103,6 +109,7 @@ impl Module {
         handlers: HashMap<MessageName, HandlerEntry>,
         query_timeout: Duration,
         max_frame_bytes: usize,
+        sim_time: bool,
         keep: crate::connector::Keep,
     ) -> Self {
         Module {
@@ -118,10 +125,13 @@ impl Module {
                 handlers,
                 query_timeout,
                 closed: AtomicBool::new(false),
+                sim_time,
+                base_clock: std::sync::atomic::AtomicU64::new(0),
                 closed_signal: tokio::sync::watch::channel(false).0,
                 keep: Mutex::new(Some(keep)),
             }),
             context: None,
+            clock: None,
         }
     }
 
@@ -140,7 +150,55 @@ impl Module {
         Module {
             shared: self.shared.clone(),
             context: node,
+            clock: self.clock.clone(),
         }
+    }
+
+    /// Whether this module stamps its messages with simulated time.
+    pub fn simulated_time(&self) -> bool {
+        self.shared.sim_time
+    }
+
+    /// The time this handle stamps on what it sends, in nanoseconds: simulated time (for a
+    /// module built with `simulated_time(true)`: the time its handler has reached, following
+    /// the time of every message it received), otherwise the wall clock (since the epoch).
+    pub fn time_ns(&self) -> u64 {
+        if !self.shared.sim_time {
+            return now_ns();
+        }
+        match &self.clock {
+            Some(c) => c.load(Ordering::Relaxed),
+            None => self.shared.base_clock.load(Ordering::Relaxed),
+        }
+    }
+
+    /// Charges `duration` of simulated time to the running handler (a move, a computation).
+    /// Does nothing for modules on the wall clock.
+    pub fn spend(&self, duration: Duration) {
+        if !self.shared.sim_time {
+            return;
+        }
+        let d = u64::try_from(duration.as_nanos()).unwrap_or(u64::MAX);
+        let t = match &self.clock {
+            Some(c) => c.fetch_add(d, Ordering::Relaxed).saturating_add(d),
+            None => self
+                .shared
+                .base_clock
+                .fetch_add(d, Ordering::Relaxed)
+                .saturating_add(d),
+        };
+        self.shared.base_clock.fetch_max(t, Ordering::Relaxed);
+    }
+
+    /// Moves simulated time forward to at least `t_ns` (a message from later arrived).
+    pub(crate) fn observe(&self, t_ns: u64) {
+        if !self.shared.sim_time {
+            return;
+        }
+        if let Some(c) = &self.clock {
+            c.fetch_max(t_ns, Ordering::Relaxed);
+        }
+        self.shared.base_clock.fetch_max(t_ns, Ordering::Relaxed);
     }
 
     /// Sends a query and waits for the reply (at most the module's query timeout).
@@ -356,7 +414,10 @@ impl Module {
             return Err(e);
         }
         match tokio::time::timeout(timeout, rx).await {
-            Ok(Ok(answer)) => Ok(answer),
+            Ok(Ok(answer)) => {
+                self.observe(answer.timestamp_ns);
+                Ok(answer)
+            }
             Ok(Err(_)) => Err(ModuleError::Disconnected),
             Err(_) => {
                 lock(&self.shared.pending).remove(&id);
@@ -388,7 +449,7 @@ impl Module {
             context: self.context,
             node: None,
             correlation: None,
-            timestamp_ns: now_ns(),
+            timestamp_ns: self.time_ns(),
             options: options.unwrap_or_default(),
             redelivery: 0,
             data,
@@ -422,6 +483,7 @@ impl Module {
             let module = Module {
                 shared,
                 context: None,
+                clock: None,
             };
             match decode(&frame, usize::MAX) {
                 Ok(envelope) => module.on_envelope(envelope),
@@ -484,6 +546,7 @@ impl Module {
                     envelope.correlation,
                     decode_data::<TaskEnded>(&envelope.data),
                 ) {
+                    self.observe(envelope.timestamp_ns);
                     if let Some(tx) = lock(&self.shared.watchers).remove(&id) {
                         let _ = tx.send(Ok(ended.outcome));
                     }
@@ -504,8 +567,23 @@ impl Module {
             return;
         };
         let node = envelope.node;
-        let ctx = Context::new(self.in_context(node), envelope.redelivery, envelope.context);
-        let module = self.clone();
+        // Each handler runs on its own simulated clock, starting when its message was sent.
+        let clock = self.shared.sim_time.then(|| {
+            let base = self.shared.base_clock.load(Ordering::Relaxed);
+            Arc::new(std::sync::atomic::AtomicU64::new(
+                base.max(envelope.timestamp_ns),
+            ))
+        });
+        let handler_module = Module {
+            shared: self.shared.clone(),
+            context: node,
+            clock,
+        };
+        let ctx = Context::new(
+            handler_module.clone(),
+            envelope.redelivery,
+            envelope.context,
+        );
         let call = entry.call.clone();
         let data = envelope.data.clone();
         // Hold the table while spawning so the handler cannot finish (and remove itself)
@@ -514,9 +592,9 @@ impl Module {
         let task = tokio::spawn(async move {
             let result = call(ctx, data).await;
             if let Some(n) = node {
-                lock(&module.shared.running).remove(&n);
+                lock(&handler_module.shared.running).remove(&n);
             }
-            module.answer(&envelope, result.map_err(|e| e.reason));
+            handler_module.answer(&envelope, result.map_err(|e| e.reason));
         });
         if let Some(n) = node {
             running.insert(n, task.abort_handle());
