@@ -1,0 +1,142 @@
+//! The `tca` command itself: ping (in-process and over zenoh), `tca up` with a launch file,
+//! registry and tree over zenoh, log show, and its errors.
+
+mod common;
+
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use common::*;
+
+fn tca(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_tca"))
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("tca runs")
+}
+
+fn stdout(out: &std::process::Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &std::process::Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn ping_in_process_prints_json() {
+    let out = tca(&["ping", "-n", "200", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let line = stdout(&out);
+    let v: serde_json::Value = serde_json::from_str(line.trim().lines().last().unwrap()).unwrap();
+    assert_eq!(v["n"], 200);
+    for k in ["min_us", "p50_us", "p99_us", "max_us"] {
+        assert!(v[k].as_f64().unwrap() > 0.0, "{k}: {v}");
+    }
+    assert!(v["min_us"].as_f64() <= v["p50_us"].as_f64());
+    assert!(v["p99_us"].as_f64() <= v["max_us"].as_f64());
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn up_starts_central_and_modules_that_the_other_commands_reach() {
+    let dir = tempfile::tempdir().unwrap();
+    let endpoint = free_endpoint();
+    let log = dir.path().join("up.mcap");
+    let launch = dir.path().join("bus.toml");
+    std::fs::write(
+        &launch,
+        format!(
+            "[central]\nlisten = [\"{endpoint}\"]\nlog = \"{}\"\n\n[[module]]\nname = \"echo\"\n",
+            log.display()
+        ),
+    )
+    .unwrap();
+    let mut up = ChildProcess::spawn(&["up", launch.to_str().unwrap()]);
+    // The echo module registers once it has started: poll the registry until it shows.
+    let registry = retry("echo registered", || async {
+        let out = tokio::task::spawn_blocking({
+            let e = endpoint.clone();
+            move || tca(&["registry", "--connect", &e])
+        })
+        .await
+        .unwrap();
+        let text = stdout(&out);
+        if out.status.success() && text.contains("tca-ping") && !text.contains("(down)") {
+            Ok(text)
+        } else {
+            Err(format!("{}{}", text, stderr(&out)))
+        }
+    })
+    .await;
+    assert!(registry.contains("echo"), "{registry}");
+    let e = endpoint.clone();
+    let out =
+        tokio::task::spawn_blocking(move || tca(&["ping", "--connect", &e, "-n", "50", "--json"]))
+            .await
+            .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let e = endpoint.clone();
+    let out = tokio::task::spawn_blocking(move || tca(&["tree", "--connect", &e]))
+        .await
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("no live task nodes"),
+        "{}",
+        stdout(&out)
+    );
+    // Ctrl-C stops central and the modules; the log is complete.
+    let _ = Command::new("kill")
+        .args(["-INT", &up.0.id().to_string()])
+        .status();
+    let stopped = within("tca up stops", async {
+        loop {
+            if let Ok(Some(status)) = up.0.try_wait() {
+                return status;
+            }
+            tokio::time::sleep(Duration::from_millis(50)).await;
+        }
+    })
+    .await;
+    assert!(stopped.success());
+    let out = tca(&["log", "show", log.to_str().unwrap(), "--class", "query"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(text.contains("tca-ping"), "{text}");
+    assert!(!text.contains("note: the log ends early"), "{text}");
+    let out = tca(&["log", "show", log.to_str().unwrap(), "--tree"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
+#[test]
+fn bad_input_gets_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let junk = dir.path().join("junk.mcap");
+    std::fs::write(&junk, b"not a log at all").unwrap();
+    let out = tca(&["log", "show", junk.to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("MCAP magic"), "{}", stderr(&out));
+
+    let launch = dir.path().join("bad.toml");
+    std::fs::write(&launch, "[[module]]\nname = \"no-such-module\"\n").unwrap();
+    let out = tca(&["up", launch.to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("not a built-in module"),
+        "{}",
+        stderr(&out)
+    );
+
+    let out = tca(&["module", "nope", "--connect", "tcp/127.0.0.1:1"]);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("no built-in module named"),
+        "{}",
+        stderr(&out)
+    );
+
+    let out = tca(&["ping", "-n", "0"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("at least 1"), "{}", stderr(&out));
+}
