@@ -1,0 +1,197 @@
+//! The Controller module on the bus: one handler per message of §4.2 over a shared
+//! [`Controller`].
+//!
+//! Queries lock the state only to read a snapshot, so they answer at once even while a
+//! move plays out. Commands take turns (central gives the module one at a time anyway;
+//! the turn lock keeps that true under any capacity), run the simulator, wait the move's
+//! wall-clock time, then raise the failure's exception in their own context and end.
+
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use tca_messages::walking::{
+    BodyMove, BodyPosition, CartLegPosition, ControllerState, ControllerStatus, GlobalLegPosition,
+    JointLegPosition, LegMove, ReadForce, SetTransForce,
+};
+use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
+use tokio::time::Instant;
+
+use crate::config::ControllerConfig;
+use crate::controller::{CommandRun, Controller, Snapshot};
+use crate::convert::{
+    Raised, body_pose_to_message, carriage_point_to_message, force_to_message, joints_from_message,
+    joints_to_message, world_point_to_message,
+};
+
+/// Connects the simulated Controller to central under `config.module_name` and serves the
+/// Controller's messages (§4.2) until the returned [`Module`] (and every clone) is dropped
+/// or closed.
+///
+/// Commands: [`LegMove`], [`BodyMove`], [`SetTransForce`]. Queries: [`BodyPosition`],
+/// [`JointLegPosition`], [`CartLegPosition`], [`GlobalLegPosition`], [`ReadForce`],
+/// [`ControllerStatus`]. A failed `legMove`/`bodyMove` raises
+/// [`MoveFailed`](tca_messages::walking::MoveFailed) (or
+/// [`HardwareFault`](tca_messages::walking::HardwareFault)) in the command's context and ends
+/// the command with failure. A bad configuration is a [`ModuleError::Usage`] saying what to
+/// fix.
+pub async fn connect(
+    connector: &Connector,
+    config: ControllerConfig,
+) -> Result<Module, ModuleError> {
+    let controller = Controller::new(&config, Instant::now())
+        .map_err(|e| ModuleError::Usage(format!("controller configuration: {e}")))?;
+    tracing::info!(
+        module = %config.module_name,
+        speed = %config.speed,
+        "simulated controller starting"
+    );
+    let s = Shared {
+        state: Arc::new(Mutex::new(controller)),
+        turn: Arc::new(tokio::sync::Mutex::new(())),
+    };
+    let builder = Module::builder(config.module_name.clone())
+        .replace(config.replace)
+        // Commands.
+        .handle({
+            let s = s.clone();
+            move |ctx: Context, m: LegMove| {
+                let s = s.clone();
+                async move {
+                    let waypoints: Vec<_> = m.waypoints.iter().map(joints_from_message).collect();
+                    s.command(&ctx, |c, now| c.leg_move(&waypoints, m.transition, now))
+                        .await
+                }
+            }
+        })
+        .handle({
+            let s = s.clone();
+            move |ctx: Context, m: BodyMove| {
+                let s = s.clone();
+                async move {
+                    s.command(&ctx, |c, now| c.body_move(m.target_y_m, now))
+                        .await
+                }
+            }
+        })
+        .handle({
+            let s = s.clone();
+            move |ctx: Context, m: SetTransForce| {
+                let s = s.clone();
+                async move {
+                    s.command(&ctx, |c, now| c.set_trans_force(m.force_n, now))
+                        .await
+                }
+            }
+        })
+        // Queries.
+        .handle({
+            let s = s.clone();
+            move |_ctx, _q: BodyPosition| {
+                let snap = s.snapshot();
+                async move { Ok(body_pose_to_message(&snap.carriage)) }
+            }
+        })
+        .handle({
+            let s = s.clone();
+            move |_ctx, _q: JointLegPosition| {
+                let snap = s.snapshot();
+                async move { Ok(joints_to_message(&snap.joints)) }
+            }
+        })
+        .handle({
+            let s = s.clone();
+            move |_ctx, _q: CartLegPosition| {
+                let snap = s.snapshot();
+                async move { Ok(carriage_point_to_message(&snap.cart_leg)) }
+            }
+        })
+        .handle({
+            let s = s.clone();
+            move |_ctx, _q: GlobalLegPosition| {
+                let snap = s.snapshot();
+                async move { Ok(world_point_to_message(&snap.global_leg)) }
+            }
+        })
+        .handle({
+            let s = s.clone();
+            move |_ctx, _q: ReadForce| {
+                let snap = s.snapshot();
+                async move { Ok(force_to_message(&snap.force)) }
+            }
+        })
+        .handle(move |_ctx, _q: ControllerStatus| {
+            let snap = s.snapshot();
+            async move {
+                Ok(ControllerState {
+                    clock_s: snap.clock.as_secs_f64(),
+                    foot_planted: snap.foot_planted,
+                    collisions: snap.collisions,
+                })
+            }
+        });
+    builder.connect(connector).await
+}
+
+/// Connects the built-in Controller ([`ControllerConfig::builtin`]: obstacle course 1, the
+/// foot planted at the start of the rails, real time) for `tca module controller`. Choosing
+/// another course or speed is the caller's job: build a [`ControllerConfig`] and call
+/// [`connect`].
+pub async fn run_builtin(connector: &Connector) -> Result<Module, ModuleError> {
+    let config = ControllerConfig::builtin()
+        .map_err(|e| ModuleError::Usage(format!("built-in controller configuration: {e}")))?;
+    connect(connector, config).await
+}
+
+/// What every handler shares.
+#[derive(Clone)]
+struct Shared {
+    state: Arc<Mutex<Controller>>,
+    /// Held by a command for its whole run, wall-clock wait included.
+    turn: Arc<tokio::sync::Mutex<()>>,
+}
+
+impl Shared {
+    fn lock(&self) -> MutexGuard<'_, Controller> {
+        // A panic while holding the lock cannot leave the simulator half-updated in a way
+        // that matters more than stopping; keep serving.
+        self.state.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn snapshot(&self) -> Snapshot {
+        self.lock().snapshot(Instant::now())
+    }
+
+    /// Runs a command: simulate, wait its wall-clock time, then raise and end.
+    async fn command(
+        &self,
+        ctx: &Context,
+        start: impl FnOnce(&mut Controller, Instant) -> CommandRun,
+    ) -> Result<(), HandlerError> {
+        let _turn = self.turn.lock().await;
+        let run = {
+            let mut state = self.lock();
+            start(&mut state, Instant::now())
+        };
+        tracing::debug!(
+            simulated_s = run.simulated.as_secs_f64(),
+            wall_s = run.wall.as_secs_f64(),
+            ok = run.outcome.is_ok(),
+            "controller command"
+        );
+        if !run.wall.is_zero() {
+            tokio::time::sleep(run.wall).await;
+        }
+        self.lock().settle(Instant::now());
+        let Err(failure) = run.outcome else {
+            return Ok(());
+        };
+        let raised = match &failure.exception {
+            Some(Raised::MoveFailed(e)) => Some(ctx.raise(e)),
+            Some(Raised::HardwareFault(e)) => Some(ctx.raise(e)),
+            None => None,
+        };
+        if let Some(Err(e)) = raised {
+            tracing::warn!(error = %e, reason = %failure.reason, "could not raise the controller's exception");
+        }
+        Err(HandlerError::new(failure.reason))
+    }
+}
