@@ -7,7 +7,9 @@
 //!   `tca ping`.
 //! - [`launch`]: launch files for `tca up`.
 //! - [`ping`]: timing query round trips through central.
+//! - [`timeline`]: the per-module timeline of Figure 18, as text and PNG.
 
 pub mod builtin;
 pub mod launch;
 pub mod ping;
+pub mod timeline;

@@ -587,3 +587,30 @@ async fn the_tree_is_rebuilt_from_the_log_at_any_time() {
     assert!(end.contains("no live task nodes"), "{end}");
     let _ = TimePoint::HandlingStart;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn log_stats_give_the_figure18_breakdown_in_simulated_time() {
+    let (_, log, _, clock) = walk_on(false, None, true).await;
+    let stats = tca_logs::stats(&log, tca_logs::TimeBase::Envelope);
+    let module = |name: &str| {
+        stats
+            .modules
+            .iter()
+            .find(|m| m.module == name)
+            .unwrap_or_else(|| panic!("{name}: {stats:#?}"))
+    };
+    // Six moves of 60 s each; three plans of 30 s each for the gait planner and the LRP.
+    assert_eq!(module("controller").computing_s, 360.0);
+    assert_eq!(module("controller").handled, 6);
+    assert_eq!(module("lrp").computing_s, 90.0);
+    assert_eq!(module("gait").computing_s, 90.0);
+    assert_eq!(stats.span_s, clock);
+    assert_eq!(module("controller").idle_s, clock - 360.0);
+    assert_eq!(stats.by_name["planGait"], 3);
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("timeline.png");
+    tca::timeline::write_png(&stats, &png).unwrap();
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+    let text = tca::timeline::text(&stats, 3);
+    assert!(text.contains("controller"), "{text}");
+}

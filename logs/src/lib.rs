@@ -13,6 +13,7 @@
 //! - [`writer`]: [`LogWriter`] (MCAP) and [`LogSink`], the writer on its own thread.
 //! - [`reader`]: [`LogFile`], reading a log back (lenient about a truncated tail).
 //! - [`show`]: rendering a log as readable lines with filters.
+//! - [`stats`]: the Figure 18 breakdown (computing, waiting, idle per module), latencies.
 //! - [`error`]: [`LogError`].
 
 pub mod error;
@@ -20,6 +21,7 @@ pub mod layout;
 pub mod reader;
 pub mod record;
 pub mod show;
+pub mod stats;
 pub mod writer;
 
 pub use error::{LogError, Result};
@@ -29,4 +31,5 @@ pub use record::{
     RegisteredRecord, TreeRecord,
 };
 pub use show::{ShowFilter, render, tree_at};
+pub use stats::{LogStats, ModuleStats, QueryStats, Span, TimeBase, stats};
 pub use writer::{FLUSH_INTERVAL, LogSink, LogWriter};

@@ -12,6 +12,28 @@ use tca_messages::Class;
 pub(crate) enum LogCommand {
     /// Print the traffic readably, one line per message.
     Show(ShowArgs),
+    /// Print the Figure 18 breakdown (per module: computing, waiting, idle), message counts
+    /// and query latencies.
+    Stats(StatsArgs),
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct StatsArgs {
+    /// The log file.
+    file: PathBuf,
+    /// Use central's clock instead of the messages' timestamps (which are simulated time
+    /// when the modules ran on it).
+    #[arg(long)]
+    central_clock: bool,
+    /// Count messages per step as deliveries divided by the number of messages of this name.
+    #[arg(long, default_value = "planStep")]
+    step: String,
+    /// Also draw the timeline (busy and waiting per module) to this PNG file.
+    #[arg(long, value_name = "FILE")]
+    png: Option<PathBuf>,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Debug, Args)]
@@ -41,6 +63,34 @@ pub(crate) struct ShowArgs {
 
 pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
     match cmd {
+        LogCommand::Stats(args) => {
+            let log = LogFile::open(&args.file)
+                .with_context(|| format!("cannot read log {}", args.file.display()))?;
+            let base = if args.central_clock {
+                tca_logs::TimeBase::Central
+            } else {
+                tca_logs::TimeBase::Envelope
+            };
+            let stats = tca_logs::stats(&log, base);
+            let steps = stats.by_name.get(&args.step).copied().unwrap_or(0);
+            if let Some(png) = &args.png {
+                tca::timeline::write_png(&stats, png)
+                    .with_context(|| format!("cannot write {}", png.display()))?;
+            }
+            if args.json {
+                let mut v = serde_json::to_value(&stats)?;
+                v["steps"] = steps.into();
+                v["messages_per_step"] = if steps > 0 {
+                    (stats.messages as f64 / steps as f64).into()
+                } else {
+                    serde_json::Value::Null
+                };
+                println!("{v}");
+            } else {
+                print!("{}", tca::timeline::text(&stats, steps));
+            }
+            Ok(ExitCode::SUCCESS)
+        }
         LogCommand::Show(args) => {
             let log = LogFile::open(&args.file)
                 .with_context(|| format!("cannot read log {}", args.file.display()))?;
