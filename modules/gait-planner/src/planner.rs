@@ -4,7 +4,7 @@
 use nalgebra::{Point2, Point3};
 use tca_lrp::TerrainMap;
 use tca_messages::walking::PlanePoint;
-use tca_robot::{CellIndex, LegKinematics, LegParams};
+use tca_robot::{CellIndex, ElbowBranch, Grid, LegKinematics, LegParams};
 
 use crate::error::{GaitError, Result};
 use crate::maps::CostMaps;
@@ -57,6 +57,54 @@ pub struct GaitPlanner {
     leg: LegParams,
     params: GaitParams,
     kin: LegKinematics,
+    forward: Kinematic,
+    backward: Kinematic,
+}
+
+/// The maps that depend only on the leg's kinematics and the cell's position relative to
+/// the carriage, the same at every step: computed once per direction.
+#[derive(Debug, Clone)]
+struct Kinematic {
+    advance: Grid<Option<(f64, ElbowBranch)>>,
+    visibility: Grid<f64>,
+}
+
+impl Kinematic {
+    fn new(
+        leg: &LegParams,
+        kin: &LegKinematics,
+        params: &GaitParams,
+        direction: Direction,
+    ) -> Result<Self> {
+        let region = Region::new(leg, params.grid.resolution_m, 0.0, direction)?;
+        let advance = advance_map(&region, leg, kin);
+        let threshold = params.body_advance.threshold_m;
+        let visibility = visibility_map(
+            &region,
+            leg,
+            kin,
+            &params.scanner_visibility,
+            &advance,
+            |a| a.min(threshold),
+        );
+        Ok(Self {
+            advance,
+            visibility,
+        })
+    }
+}
+
+/// The same cells placed at another grid's origin (the region's, which has the same size).
+fn relaid<T: Clone>(layout: &Grid<()>, cells: &Grid<T>) -> Grid<T> {
+    Grid::from_vec(
+        layout.origin(),
+        layout.resolution_m(),
+        cells.nx(),
+        cells.ny(),
+        cells.cells().to_vec(),
+    )
+    // Only a non-finite origin fails, which `Region::new` refuses.
+    .unwrap_or_else(|_| cells.clone())
 }
 
 impl GaitPlanner {
@@ -66,7 +114,15 @@ impl GaitPlanner {
             .map_err(|e| GaitError::LegParams(e.to_string()))?;
         params.validate()?;
         let kin = LegKinematics::new(&leg);
-        Ok(Self { leg, params, kin })
+        let forward = Kinematic::new(&leg, &kin, &params, Direction::Forward)?;
+        let backward = Kinematic::new(&leg, &kin, &params, Direction::Backward)?;
+        Ok(Self {
+            leg,
+            params,
+            kin,
+            forward,
+            backward,
+        })
     }
 
     /// The planner's parameters.
@@ -161,20 +217,28 @@ impl GaitPlanner {
             &p.footfall,
             foot_radius,
         );
-        let advance = advance_map(&region, &self.leg, &self.kin);
+        let cached = match region.direction {
+            Direction::Forward => &self.forward,
+            Direction::Backward => &self.backward,
+        };
+        let advance = relaid(&region.layout, &cached.advance);
         let body_advance_m = advance.map(|a| a.map(|(m, _)| m));
         let body_advance = body_advance_m.map(|a| match a {
             Some(m) => 1.0 - m.min(step_limit) / step_limit,
             None => 1.0,
         });
-        let scanner_visibility = visibility_map(
-            &region,
-            &self.leg,
-            &self.kin,
-            &p.scanner_visibility,
-            &advance,
-            |a| a.min(step_limit),
-        );
+        let scanner_visibility = if step_limit < p.body_advance.threshold_m {
+            visibility_map(
+                &region,
+                &self.leg,
+                &self.kin,
+                &p.scanner_visibility,
+                &advance,
+                |a| a.min(step_limit),
+            )
+        } else {
+            relaid(&region.layout, &cached.visibility)
+        };
         let mut reachable = region.grid_of(false);
         for (c, v) in reachable.iter_mut() {
             let kinematic = body_advance_m.get(c).is_some_and(|a| a.is_some());

@@ -125,7 +125,9 @@ impl CSpace {
             let growth = cs.reach_max_m(e - 0.5 * de, e + 0.5 * de) * 0.5 * ds + l2 * 0.5 * de;
             for is in 0..ns {
                 let s = cs.s_min + (is as f64 + 0.5) * ds;
-                let (h, _) = cs.obstacles.max_in_disc(cs.foot_xy(s, e), base + growth);
+                let h = cs
+                    .obstacles
+                    .max_height_in_disc(cs.foot_xy(s, e), base + growth);
                 cs.required_m.push(h + params.clearance_m);
             }
         }

@@ -90,6 +90,19 @@ impl PartialOrd for Entry {
     }
 }
 
+/// Whether label `b` of a cell makes label `l` of the same cell (another direction)
+/// useless: anything `l` can do next, `b` can do too after at most one more turn, after
+/// waiting until its envelope covers `l`'s (the envelope widens while the leg waits), and
+/// after paying the lift energy `l` has already paid for. Costs within the search's label
+/// model (one envelope per state).
+fn dominates(b: &Label, l: &Label, model: &CostModel, v: f64, energy_weight: f64) -> bool {
+    let wait = ((l.env.hi_m - b.env.hi_m) / v)
+        .max((b.env.lo_m - l.env.lo_m) / v)
+        .max(0.0);
+    let lift = energy_weight * model.lift_power_w * (l.peak_m - b.peak_m).max(0.0) / v;
+    b.g + model.turn_penalty_s + wait + lift < l.g
+}
+
 /// Runs the ETFA from the foot at height `start_z_m` in cell `start` to the nearest (in cost)
 /// of `goals`. The start cell must be free. `None` when no goal can be reached.
 pub fn search(
@@ -105,19 +118,25 @@ pub fn search(
     let v = speeds.vertical_m_per_s;
     let (_, z_max) = cs.z_range_m();
     let (ts, te) = cs.cell_time_s();
+    let (cell_s, cell_e) = cs.cell_size_rad();
     let energy_weight = model.energy_weight_s_per_kj * 1e-3;
-    let heuristic = |c: CCell| -> f64 {
-        goals
-            .iter()
-            .map(|g| {
-                let di = c.is.abs_diff(g.cell.is) as f64;
-                let dj = c.ie.abs_diff(g.cell.ie) as f64;
-                let time = (di * ts).max(dj * te);
-                let energy = model.shoulder_power_w * di * ts + model.elbow_power_w * dj * te;
-                time + energy_weight * energy
-            })
-            .fold(f64::INFINITY, f64::min)
-    };
+    // The heuristic of every cell, computed once.
+    let h_cell: Vec<f64> = (0..ns * ne)
+        .map(|i| {
+            let c = cs.cell(i);
+            goals
+                .iter()
+                .map(|g| {
+                    let di = c.is.abs_diff(g.cell.is) as f64;
+                    let dj = c.ie.abs_diff(g.cell.ie) as f64;
+                    let time = (di * ts).max(dj * te);
+                    let energy = model.shoulder_power_w * di * ts + model.elbow_power_w * dj * te;
+                    time + energy_weight * energy
+                })
+                .fold(f64::INFINITY, f64::min)
+        })
+        .collect();
+    let heuristic = |c: CCell| -> f64 { h_cell.get(cs.index(c)).copied().unwrap_or(f64::INFINITY) };
     if goals.is_empty() || !cs.is_free(start) {
         return None;
     }
@@ -125,6 +144,12 @@ pub fn search(
     let mut labels: Vec<Option<Label>> = vec![None; cells * STATES_PER_CELL];
     let mut closed = vec![false; cells * STATES_PER_CELL];
     let mut expanded = vec![false; cells];
+    // The cheapest label of each cell: a label of another direction that it dominates (see
+    // `dominates`) is dropped, which removes most of the direction dimension's work.
+    let mut best_in_cell: Vec<Option<Label>> = vec![None; cells];
+    let dominated = |best: &Option<Label>, l: &Label| {
+        best.is_some_and(|b| dominates(&b, l, model, speeds.vertical_m_per_s, energy_weight))
+    };
     let mut heap = BinaryHeap::new();
 
     // Lift at the start until the foot clears its own cell.
@@ -147,6 +172,7 @@ pub fn search(
     };
     let start_state = cs.index(start) * STATES_PER_CELL + NO_DIRECTION;
     labels[start_state] = Some(start_label);
+    best_in_cell[cs.index(start)] = Some(start_label);
     heap.push(Entry {
         f: g0 + heuristic(start),
         g: g0,
@@ -165,8 +191,11 @@ pub fn search(
         }
         closed[state] = true;
         let Some(label) = labels[state] else { continue };
-        expansions += 1;
         let cell_index = state / STATES_PER_CELL;
+        if dominated(&best_in_cell[cell_index], &label) {
+            continue;
+        }
+        expansions += 1;
         let dir = state % STATES_PER_CELL;
         let cell = cs.cell(cell_index);
         expanded[cell_index] = true;
@@ -188,31 +217,38 @@ pub fn search(
         }
 
         let r_here = cs.required_m(cell);
-        for (next, (di, dj)) in cs.neighbours(cell) {
+        for (next_dir, &(di, dj)) in DIRECTIONS.iter().enumerate() {
+            let (Some(is), Some(ie)) = (
+                cell.is.checked_add_signed(isize::from(di)),
+                cell.ie.checked_add_signed(isize::from(dj)),
+            ) else {
+                continue;
+            };
+            if is >= ns || ie >= ne {
+                continue;
+            }
+            let next = CCell { is, ie };
+            let next_state = cs.index(next) * STATES_PER_CELL + next_dir;
+            if closed[next_state] {
+                continue;
+            }
             let r_next = cs.required_m(next);
             let border = cs.step_required_m(cell, next);
-            let (ds, de) = cs.cell_size_rad();
-            let dt = speeds.horizontal_time_s(f64::from(di) * ds, f64::from(dj) * de);
+            let (ds, de) = (f64::from(di) * cell_s, f64::from(dj) * cell_e);
+            let dt = speeds.horizontal_time_s(ds, de);
             let Some((env, wait)) = label.env.step(dt, v, r_here, border, r_next, z_max) else {
                 continue;
             };
-            let next_dir = DIRECTIONS
-                .iter()
-                .position(|&d| d == (di, dj))
-                .unwrap_or(NO_DIRECTION);
             let turned = dir != NO_DIRECTION && dir != next_dir;
             let peak = label.peak_m.max(border);
             let energy_j = label.energy_j
-                + model.horizontal_energy_j(&speeds, f64::from(di) * ds, f64::from(dj) * de)
+                + model.horizontal_energy_j(&speeds, ds, de)
                 + model.vertical_energy_j(&speeds, peak - label.peak_m);
             let time_s = label.time_s + dt + wait;
             let turns = label.turns + u32::from(turned);
             let g = time_s + model.turn_penalty_s * f64::from(turns) + energy_weight * energy_j;
-            let next_state = cs.index(next) * STATES_PER_CELL + next_dir;
-            if closed[next_state] || labels[next_state].is_some_and(|l| l.g <= g) {
-                continue;
-            }
-            labels[next_state] = Some(Label {
+            let next_index = next_state / STATES_PER_CELL;
+            let next_label = Label {
                 g,
                 time_s,
                 energy_j,
@@ -220,7 +256,16 @@ pub fn search(
                 peak_m: peak,
                 env,
                 parent: state as u32,
-            });
+            };
+            if labels[next_state].is_some_and(|l| l.g <= g)
+                || dominated(&best_in_cell[next_index], &next_label)
+            {
+                continue;
+            }
+            if best_in_cell[next_index].is_none_or(|b| g < b.g) {
+                best_in_cell[next_index] = Some(next_label);
+            }
+            labels[next_state] = Some(next_label);
             heap.push(Entry {
                 f: g + heuristic(next),
                 g,

@@ -39,6 +39,15 @@ impl<T: Copy> Padded<T> {
         Self { nx, pad, values }
     }
 
+    /// The same layout with every value mapped.
+    pub(crate) fn map<U>(&self, f: impl Fn(T) -> U) -> Padded<U> {
+        Padded {
+            nx: self.nx,
+            pad: self.pad,
+            values: self.values.iter().map(|&v| f(v)).collect(),
+        }
+    }
+
     /// The value at region cell `(ix, iy)` offset by `(dx, dy)` cells (within the padding).
     pub(crate) fn at(&self, ix: usize, iy: usize, dx: isize, dy: isize) -> Option<T> {
         let x = (ix + self.pad).checked_add_signed(dx)?;
@@ -96,17 +105,18 @@ pub(crate) fn filtered_footfall(
         .into_iter()
         .map(|(dx, dy, d)| (dx, dy, distance_scale_m / (distance_scale_m + d)))
         .collect();
+    // The cost of every padded cell once (unknown costs 1), then a weighted maximum.
+    let costs = statistic.map(|v| match v {
+        Some(s) => (s.max(0.0) / worst_m).min(1.0),
+        None => 1.0,
+    });
     let nx = region.layout.nx();
     let mut g = region.grid_of(0.0);
     for (i, v) in g.cells_mut().iter_mut().enumerate() {
         let (ix, iy) = (i % nx, i / nx);
         let mut top: f64 = 0.0;
         for &(dx, dy, w) in &offsets {
-            let cost = match statistic.at(ix, iy, dx, dy).flatten() {
-                Some(s) => (s.max(0.0) / worst_m).min(1.0),
-                None => 1.0,
-            };
-            top = top.max(cost * w);
+            top = top.max(costs.at(ix, iy, dx, dy).unwrap_or(1.0) * w);
         }
         *v = top;
     }

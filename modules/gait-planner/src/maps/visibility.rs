@@ -22,10 +22,13 @@ pub(crate) fn visibility_map(
     let scanner_from_carriage: Isometry3<f64> = leg.scanner.carriage_from_scanner().inverse();
     let (l1, _) = kin.link_lengths_m();
     let vertical = 0.5 * (leg.leg.vertical.min_m + leg.leg.vertical.max_m);
-    let (half_az, half_el) = (0.5 * params.azimuth_fov_rad, 0.5 * params.elevation_fov_rad);
+    // Inside the field of view: in front of the scanner, within half the azimuth and half
+    // the elevation field of the boresight (compared through tangents, no trigonometry).
+    let tan_az = (0.5 * params.azimuth_fov_rad).min(1.5).tan();
+    let tan_el = (0.5 * params.elevation_fov_rad).min(1.5).tan();
     let in_view = |p: Point3<f64>| {
         let s = scanner_from_carriage * p;
-        s.x > 0.0 && s.y.atan2(s.x).abs() <= half_az && s.z.atan2(s.x.hypot(s.y)).abs() <= half_el
+        s.x > 0.0 && s.y.abs() <= s.x * tan_az && s.z.abs() <= s.x.hypot(s.y) * tan_el
     };
     let sign = region.direction.sign();
     let mut out = region.grid_of(0.0);
