@@ -14,9 +14,11 @@
 //! - [`reader`]: [`LogFile`], reading a log back (lenient about a truncated tail).
 //! - [`show`]: rendering a log as readable lines with filters.
 //! - [`stats`]: the Figure 18 breakdown (computing, waiting, idle per module), latencies.
+//! - [`export`]: a JSON-encoded copy of a log for Foxglove Studio.
 //! - [`error`]: [`LogError`].
 
 pub mod error;
+pub mod export;
 pub mod layout;
 pub mod reader;
 pub mod record;
@@ -25,6 +27,7 @@ pub mod stats;
 pub mod writer;
 
 pub use error::{LogError, Result};
+pub use export::export_json;
 pub use reader::{KnownFormat, LogFile};
 pub use record::{
     Direction, FrameRecord, LinkEvent, LinkRecord, LogRecord, ProblemRecord, RecordKind,

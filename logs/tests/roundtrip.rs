@@ -129,3 +129,32 @@ proptest! {
         let _ = LogFile::parse(&path, &bytes);
     }
 }
+
+#[test]
+fn the_json_export_opens_as_plain_mcap_with_decoded_data() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("e.mcap");
+    let mut w = LogWriter::create(&path).unwrap();
+    for r in &records(5) {
+        w.append(r).unwrap();
+    }
+    w.finish().unwrap();
+    let log = LogFile::open(&path).unwrap();
+    let out = dir.path().join("e.json.mcap");
+    assert_eq!(export_json(&log, &out).unwrap(), 6);
+    let bytes = std::fs::read(&out).unwrap();
+    let mut seen = 0;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        assert_eq!(m.channel.message_encoding, "json");
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        if m.channel.topic == "bodyMove" {
+            assert_eq!(v["class"], "command");
+            assert_eq!(v["from"], "gait");
+            assert_eq!(v["to"], "controller");
+            assert_eq!(v["data"], serde_json::json!(f64::from(seen) / 2.0));
+            seen += 1;
+        }
+    }
+    assert_eq!(seen, 5);
+}

@@ -12,9 +12,20 @@ use tca_messages::Class;
 pub(crate) enum LogCommand {
     /// Print the traffic readably, one line per message.
     Show(ShowArgs),
+    /// Write a JSON-encoded copy of the log that Foxglove Studio opens.
+    Export(ExportArgs),
     /// Print the Figure 18 breakdown (per module: computing, waiting, idle), message counts
     /// and query latencies.
     Stats(StatsArgs),
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct ExportArgs {
+    /// The log file.
+    file: PathBuf,
+    /// Where to write the JSON-encoded MCAP copy.
+    #[arg(long, value_name = "OUT.mcap")]
+    json: PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -63,6 +74,14 @@ pub(crate) struct ShowArgs {
 
 pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
     match cmd {
+        LogCommand::Export(args) => {
+            let log = LogFile::open(&args.file)
+                .with_context(|| format!("cannot read log {}", args.file.display()))?;
+            let n = tca_logs::export_json(&log, &args.json)
+                .with_context(|| format!("cannot write {}", args.json.display()))?;
+            eprintln!("wrote {n} JSON messages to {}", args.json.display());
+            Ok(ExitCode::SUCCESS)
+        }
         LogCommand::Stats(args) => {
             let log = LogFile::open(&args.file)
                 .with_context(|| format!("cannot read log {}", args.file.display()))?;
