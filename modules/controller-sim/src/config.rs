@@ -142,6 +142,12 @@ pub struct ControllerConfig {
     /// Take the Controller's messages over from whichever module registered them before
     /// (default true, so a restarted or swapped-in simulator takes over).
     pub replace: bool,
+    /// Stamp the module's messages with the bus's simulated time
+    /// ([`tca_module::ModuleBuilder::simulated_time`]): each command charges its move's
+    /// simulated duration ([`tca_module::Module::spend`]), so the stamps of a whole system
+    /// running as fast as possible add up like the real mechanism's. Default false (wall
+    /// clock stamps).
+    pub bus_simulated_time: bool,
 }
 
 impl ControllerConfig {
@@ -156,6 +162,7 @@ impl ControllerConfig {
             speed: SpeedFactor::default(),
             module_name: DEFAULT_MODULE_NAME.to_owned(),
             replace: true,
+            bus_simulated_time: false,
         }
     }
 

@@ -50,6 +50,7 @@ pub async fn connect(
     };
     let builder = Module::builder(config.module_name.clone())
         .replace(config.replace)
+        .simulated_time(config.bus_simulated_time)
         // Commands.
         .handle({
             let s = s.clone();
@@ -181,6 +182,8 @@ impl Shared {
             tokio::time::sleep(run.wall).await;
         }
         self.lock().settle(Instant::now());
+        // On the bus's simulated time (if the module uses it) the move took this long.
+        ctx.spend(run.simulated);
         let Err(failure) = run.outcome else {
             return Ok(());
         };

@@ -355,3 +355,38 @@ async fn queries_answer_while_a_move_plays_out() {
     assert!(!outcome.is_finished());
     outcome.abort();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn moves_advance_the_bus_simulated_time() {
+    let (_central, connector) = central().await;
+    let mut config = builtin_fast();
+    config.bus_simulated_time = true;
+    let _controller = tca_controller_sim::connect(&connector, config)
+        .await
+        .unwrap();
+    let user = Module::builder("user")
+        .simulated_time(true)
+        .connect(&connector)
+        .await
+        .unwrap();
+    assert_eq!(user.time_ns(), 0);
+    let q = user.query(&JointLegPosition).await.unwrap();
+    let lift = LegMove {
+        waypoints: vec![Joints {
+            vertical_m: q.vertical_m - 0.3,
+            ..q
+        }],
+        transition: false,
+    };
+    let task = user.send_task(&lift, notify()).unwrap();
+    let outcome = within("legMove ends", task.outcome()).await.unwrap();
+    assert_eq!(outcome, TaskOutcome::Achieved);
+    // The user's clock moved on by the move's simulated duration, though nothing waited.
+    let move_s = user.query(&ControllerStatus).await.unwrap().clock_s;
+    assert!(move_s > 8.0, "{move_s}");
+    let user_s = user.time_ns() as f64 / 1e9;
+    assert!(
+        (user_s - move_s).abs() < 1e-6,
+        "user {user_s} s, move {move_s} s"
+    );
+}
