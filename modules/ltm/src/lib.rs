@@ -1,1 +1,41 @@
-//! Local Terrain Map Manager: elevation, uncertainty, footfall and slope maps.
+//! Local Terrain Map Manager (report 003, §5.2.2): builds elevation maps with per-cell
+//! uncertainty from range images, merges them by maximum likelihood, keeps a 20 x 20 m window
+//! around the vehicle in memory (paging the rest to disk), and answers region queries for
+//! elevation, elevation with uncertainty, footfall evaluation and slope maps, with a cache.
+//!
+//! # Layout
+//!
+//! - [`builder`]: the LTM Builder: range image -> map patch ([`build_map`]); its method (an
+//!   equivalent of the Locus method) and uncertainty model are documented there.
+//! - [`cell`]: a map [`Cell`] (unknown, occluded with its greatest elevation, or known with a
+//!   standard deviation) and the Merger's maximum-likelihood rule [`fuse`].
+//! - [`patch`]: the world-aligned lattice every map of one resolution shares, and dense
+//!   rectangles of it ([`Patch`]).
+//! - [`scroller`]: the LTM Scroller: the tiled map store with its window around the vehicle
+//!   ([`TileStore`]); [`tile_file`]: the tiles' on-disk format.
+//! - [`footfall`]: footfall cost and slope over the foot's area.
+//! - [`region`]: checked query regions (polygon and resolution) and their grids.
+//! - [`query`]: answering region queries, and the query cache.
+//! - [`manager`]: [`TerrainMap`], the whole manager's state, and [`LtmConfig`].
+//! - [`error`]: [`LtmError`] and the [`Result`] alias.
+
+pub mod builder;
+pub mod cell;
+pub mod error;
+pub mod footfall;
+pub mod manager;
+pub mod patch;
+pub mod query;
+pub mod region;
+pub mod scroller;
+pub mod tile_file;
+
+pub use builder::{BuilderConfig, build_map};
+pub use cell::{Cell, CellState, fuse};
+pub use error::{LtmError, Result};
+pub use footfall::{FootEvaluator, FootParams, Footing};
+pub use manager::{LtmConfig, MergeReport, TerrainMap};
+pub use patch::Patch;
+pub use query::CacheStats;
+pub use region::Region;
+pub use scroller::{ScrollReport, TileStore};

@@ -1,1 +1,21 @@
-//! Perception Display Manager: map pictures as PNG.
+//! Perception Display Manager (report 003, §5.2.3): draws the LTM Manager's maps of any kind
+//! and region as PNG pictures, with requested 3D positions (planned footfalls) and paths (leg
+//! paths) drawn over them.
+//!
+//! # Layout
+//!
+//! - [`render`]: a [`MapGrid`](tca_messages::walking::MapGrid) and its overlays -> a
+//!   [`Picture`]: colour ramp, unknown/occluded patterns, colour scale, distance scale bar,
+//!   extent, overlays; [`render_png`] and [`write_png`].
+//! - [`canvas`]: the RGB [`Picture`], drawing primitives and PNG encoding.
+//! - `font`: the 5 x 7 bitmap font of the labels.
+//! - [`error`]: [`PdmError`] and the [`Result`] alias.
+
+pub mod canvas;
+pub mod error;
+mod font;
+pub mod render;
+
+pub use canvas::{Picture, Rgb};
+pub use error::{PdmError, Result};
+pub use render::{MapLayout, RenderOptions, render, render_png, write_png};
