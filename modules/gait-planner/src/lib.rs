@@ -33,6 +33,8 @@
 //!   and the body move ([`StepPlan`]).
 //! - [`synthetic`]: footfall and elevation maps from a height field (tests, benchmarks).
 //! - [`picture`]: a PNG mosaic of the cost maps.
+//! - `serve.rs`: [`connect`] and [`GaitConfig`]: the module on the bus (the `planStep`
+//!   goal: queries, choice, `recoverLeg` then `bodyMove`, `stepPlanned`).
 //! - [`error`]: the planning failures, [`GaitError`].
 //!
 //! # Frames and units
@@ -46,6 +48,7 @@ pub mod params;
 pub mod picture;
 pub mod planner;
 pub mod region;
+mod serve;
 pub mod synthetic;
 
 pub use error::{GaitError, Result};
@@ -53,3 +56,4 @@ pub use maps::CostMaps;
 pub use params::GaitParams;
 pub use planner::{GaitMaps, GaitPlanner, StepPlan};
 pub use region::{Direction, Region};
+pub use serve::{DEFAULT_MODULE_NAME, GaitConfig, connect};

@@ -21,6 +21,14 @@ pub enum PlanError {
         /// What is wrong with it.
         reason: String,
     },
+    /// A region asked for is not a usable polygon or grid.
+    #[error(
+        "the region asked for is not valid: {reason}; give at least three finite corners and a resolution above 0"
+    )]
+    BadRegion {
+        /// What is wrong with it.
+        reason: String,
+    },
     /// A planner parameter is out of range.
     #[error("planner parameter `{key}` = {value} is not valid: {reason}")]
     BadParams {

@@ -39,6 +39,9 @@
 //! - [`exact`]: an exact search over (shoulder, elbow, foot height) used to measure the
 //!   ETFA (tests, benchmarks).
 //! - [`picture`]: PNG pictures of the configuration space and the search.
+//! - [`polygon`]: map regions as polygons (validation, bounding grid, inclusion).
+//! - `serve.rs`: [`connect`] and [`LrpConfig`]: the module on the bus (`recoverLeg` goal,
+//!   `legReachability` query), failures raised as `moveFailed`.
 //! - [`error`]: the planning failures, [`PlanError`].
 //!
 //! # Frames and units
@@ -56,6 +59,8 @@ pub mod exact;
 pub mod params;
 pub mod picture;
 pub mod planner;
+pub mod polygon;
+mod serve;
 pub mod terrain_map;
 pub mod trajectory;
 
@@ -65,4 +70,5 @@ pub use envelope::Envelope;
 pub use error::{PlanError, Result};
 pub use params::LrpParams;
 pub use planner::{LegPlan, LegRecoveryPlanner, Reachability};
+pub use serve::{DEFAULT_MODULE_NAME, LrpConfig, connect, reachability_map};
 pub use terrain_map::{MapValue, ObstacleHeights, TerrainMap};
