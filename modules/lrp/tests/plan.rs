@@ -308,3 +308,52 @@ fn unknown_terrain_counts_as_an_obstacle_of_the_configured_height() {
     assert!((peak - 0.85).abs() < 1e-9, "{peak}");
     let _: &TerrainMap = &map;
 }
+
+mod properties {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(40))]
+
+        /// On random scenes and footfalls, a plan is either a clear error or a trajectory
+        /// that clears every cell it passes, keeps the vertical axis within its speed along
+        /// horizontal moves, and ends with a pure lowering onto the footfall.
+        #[test]
+        fn plans_clear_the_terrain_or_fail_clearly(
+            seed in 0u64..10_000,
+            gx in 1.0f64..5.0,
+            gy in 2.0f64..6.0,
+        ) {
+            let (terrain, a, _) = random_scene(seed);
+            let map = map_around(&terrain, 4.0);
+            let p = planner();
+            let cs = p.cspace(&map, 4.0).unwrap();
+            let start = planted(&terrain, 4.0, a, ElbowBranch::Positive);
+            let goal = footfall(&terrain, Point2::new(gx, gy));
+            match p.plan_in(&cs, &start, &goal) {
+                Ok(plan) => {
+                    prop_assert!(check_clearance(&cs, &plan.points).is_ok());
+                    let speeds = *cs.speeds();
+                    for w in plan.points.windows(2) {
+                        let th = speeds.horizontal_time_s(w[1][0] - w[0][0], w[1][1] - w[0][1]);
+                        if th > 0.0 {
+                            prop_assert!((w[1][2] - w[0][2]).abs() <= V * th + 1e-9);
+                        }
+                    }
+                    let n = plan.waypoints.len();
+                    prop_assert!(n >= 2);
+                    let (before, last) = (plan.waypoints[n - 2], plan.waypoints[n - 1]);
+                    prop_assert_eq!(before.shoulder_rad, last.shoulder_rad);
+                    prop_assert_eq!(before.elbow_rad, last.elbow_rad);
+                    prop_assert!(last.vertical_m > before.vertical_m);
+                }
+                Err(e) => {
+                    let msg = e.to_string();
+                    prop_assert!(!matches!(e, PlanError::Internal(_)), "{}", msg);
+                    prop_assert!(msg.contains("choose") || msg.contains("give"), "{}", msg);
+                }
+            }
+        }
+    }
+}
