@@ -42,8 +42,11 @@ pub(crate) struct Shared {
     closed: AtomicBool,
     /// Stamp envelopes with simulated time (see [`Module::spend`]) instead of the wall clock.
     sim_time: bool,
-    /// The module's simulated time: the latest any of its handlers reached, nanoseconds.
+    /// The module's simulated time: the latest time it has seen or reached, nanoseconds.
     base_clock: std::sync::atomic::AtomicU64,
+    /// When its latest goal, command or exception handler finished (simulated ns): the
+    /// next one cannot start earlier, as the module handles them in turn.
+    busy_until: std::sync::atomic::AtomicU64,
     closed_signal: tokio::sync::watch::Sender<bool>,
     /// Keeps the transport open while any handle lives (taken by [`Module::abort_link`]).
     keep: Mutex<Option<crate::connector::Keep>>,
@@ -127,6 +130,7 @@ impl Module {
                 closed: AtomicBool::new(false),
                 sim_time,
                 base_clock: std::sync::atomic::AtomicU64::new(0),
+                busy_until: std::sync::atomic::AtomicU64::new(0),
                 closed_signal: tokio::sync::watch::channel(false).0,
                 keep: Mutex::new(Some(keep)),
             }),
@@ -567,12 +571,23 @@ impl Module {
             return;
         };
         let node = envelope.node;
-        // Each handler runs on its own simulated clock, starting when its message was sent.
+        // Each handler runs on its own simulated clock: a query or inform is answered as of
+        // the time it was sent; a goal, command or exception starts when it was sent or when
+        // the module's previous one finished, whichever is later.
+        let is_task = matches!(
+            envelope.class,
+            Class::Goal | Class::Command | Class::Exception
+        );
         let clock = self.shared.sim_time.then(|| {
-            let base = self.shared.base_clock.load(Ordering::Relaxed);
-            Arc::new(std::sync::atomic::AtomicU64::new(
-                base.max(envelope.timestamp_ns),
-            ))
+            let start = if is_task {
+                self.shared
+                    .busy_until
+                    .load(Ordering::Relaxed)
+                    .max(envelope.timestamp_ns)
+            } else {
+                envelope.timestamp_ns
+            };
+            Arc::new(std::sync::atomic::AtomicU64::new(start))
         });
         let handler_module = Module {
             shared: self.shared.clone(),
@@ -593,6 +608,13 @@ impl Module {
             let result = call(ctx, data).await;
             if let Some(n) = node {
                 lock(&handler_module.shared.running).remove(&n);
+            }
+            if is_task {
+                let end = handler_module.time_ns();
+                handler_module
+                    .shared
+                    .busy_until
+                    .fetch_max(end, Ordering::Relaxed);
             }
             handler_module.answer(&envelope, result.map_err(|e| e.reason));
         });
