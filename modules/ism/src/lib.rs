@@ -16,6 +16,8 @@
 //! - [`stored`]: [`StoredSequence`], the sensor replaying images from disk, and the
 //!   `.tcarange` file format.
 //! - [`calibration`]: least-squares `scanner <- body` calibration from a target on the leg.
+//! - [`module`]: the ISM on the bus: [`connect`] with an [`IsmConfig`] answers
+//!   `acquireImage`, asking the Controller for `bodyPosition`.
 //! - [`error`]: [`IsmError`] and the [`Result`] alias.
 //!
 //! Images travel as the wire type [`RangeImage`](tca_messages::walking::RangeImage): range
@@ -25,6 +27,7 @@
 pub mod calibration;
 pub mod error;
 pub mod frames;
+pub mod module;
 pub mod noise;
 pub mod scanner;
 pub mod sensor;
@@ -37,6 +40,7 @@ pub use calibration::{
 };
 pub use error::{IsmError, Result};
 pub use frames::ImageFrames;
+pub use module::{IsmConfig, connect};
 pub use noise::{NoiseModel, ReflectanceModel};
 pub use scanner::{SphereTarget, VirtualScanner};
 pub use sensor::RangeSensor;

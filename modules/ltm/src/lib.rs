@@ -17,6 +17,8 @@
 //! - [`region`]: checked query regions (polygon and resolution) and their grids.
 //! - [`query`]: answering region queries, and the query cache.
 //! - [`manager`]: [`TerrainMap`], the whole manager's state, and [`LtmConfig`].
+//! - [`module`]: the LTM Manager on the bus: [`connect`] answers `mapRegion`, asking the ISM
+//!   for `acquireImage` when a refresh is requested or it has no map yet.
 //! - [`error`]: [`LtmError`] and the [`Result`] alias.
 
 pub mod builder;
@@ -24,6 +26,7 @@ pub mod cell;
 pub mod error;
 pub mod footfall;
 pub mod manager;
+pub mod module;
 pub mod patch;
 pub mod query;
 pub mod region;
@@ -35,6 +38,7 @@ pub use cell::{Cell, CellState, fuse};
 pub use error::{LtmError, Result};
 pub use footfall::{FootEvaluator, FootParams, Footing};
 pub use manager::{LtmConfig, MergeReport, TerrainMap};
+pub use module::{connect, connect_with_map};
 pub use patch::Patch;
 pub use query::CacheStats;
 pub use region::Region;

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use nalgebra::Point2;
 use tca_ism::ImageFrames;
-use tca_messages::walking::{MapGrid, MapRegion, RangeImage};
+use tca_messages::walking::{MapGrid, MapRegion, RangeImage, SensorKind};
 
 use crate::builder::{BuilderConfig, build_map};
 use crate::cell::{Cell, fuse};
@@ -36,6 +36,8 @@ pub struct LtmConfig {
     pub max_query_cells: usize,
     /// Cells the query cache may hold before it is emptied.
     pub cache_cells: usize,
+    /// The sensor the module asks the ISM for when it needs an image.
+    pub sensor: SensorKind,
 }
 
 impl Default for LtmConfig {
@@ -49,6 +51,7 @@ impl Default for LtmConfig {
             merge_gate_sigmas: Some(5.0),
             max_query_cells: 4 << 20,
             cache_cells: 8 << 20,
+            sensor: SensorKind::Erim,
         }
     }
 }
@@ -198,13 +201,18 @@ impl TerrainMap {
             .cell(lattice_index(p.x, r), lattice_index(p.y, r))
     }
 
-    /// Answers a region query (the `refresh` flag is the module's business and ignored here).
-    pub fn query(&mut self, request: &MapRegion) -> Result<MapGrid> {
-        let region = Region::new(
+    /// Checks a region request without answering it.
+    pub fn check_region(&self, request: &MapRegion) -> Result<Region> {
+        Region::new(
             &request.polygon,
             request.resolution_m,
             self.config.max_query_cells,
-        )?;
+        )
+    }
+
+    /// Answers a region query (the `refresh` flag is the module's business and ignored here).
+    pub fn query(&mut self, request: &MapRegion) -> Result<MapGrid> {
+        let region = self.check_region(request)?;
         answer(
             &region,
             request.kind,

@@ -22,6 +22,9 @@ pub enum PdmError {
         /// Largest side drawn.
         limit: u32,
     },
+    /// The map could not be obtained from the LTM Manager.
+    #[error("the LTM Manager did not give the map: {0}")]
+    Map(String),
     /// PNG encoding failed.
     #[error("PNG encoding failed: {0}")]
     Encode(String),

@@ -109,6 +109,7 @@ fn units(kind: MapKind) -> &'static str {
         MapKind::ElevationUncertainty => "SIGMA M",
         MapKind::Footfall => "FOOTFALL COST M",
         MapKind::Slope => "SLOPE RAD",
+        MapKind::Reachability => "REACHABLE 1 0",
     }
 }
 
@@ -519,7 +520,10 @@ mod tests {
             res: 1.0,
         };
         let (a, b) = area.clip((0.0, 50.0), (200.0, 50.0)).unwrap();
-        assert!((a.0 - 10.0).abs() < 1e-9 && (b.0 - 110.0).abs() < 1e-9, "{a:?} {b:?}");
+        assert!(
+            (a.0 - 10.0).abs() < 1e-9 && (b.0 - 110.0).abs() < 1e-9,
+            "{a:?} {b:?}"
+        );
         assert!(area.clip((0.0, 0.0), (5.0, 200.0)).is_none());
     }
 }

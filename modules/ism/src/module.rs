@@ -1,0 +1,114 @@
+//! The ISM as a TCA module: answers `acquireImage` ([`AcquireImage`] -> [`RangeImage`]) by
+//! asking the Controller for the carriage pose (`bodyPosition`) and acquiring an image from
+//! the configured sensor of the kind asked for.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+use tca_messages::walking::{AcquireImage, BodyPosition, RangeImage, SensorKind};
+use tca_module::{Connector, HandlerError, Module, ModuleError};
+use tca_robot::{HeightField, LegParams};
+
+use crate::frames::carriage_pose;
+use crate::scanner::VirtualScanner;
+use crate::sensor::RangeSensor;
+use crate::spec::SensorSpec;
+
+/// The ISM's sensors: at most one of each kind.
+#[derive(Default)]
+pub struct IsmConfig {
+    sensors: Vec<Box<dyn RangeSensor>>,
+}
+
+impl std::fmt::Debug for IsmConfig {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("IsmConfig")
+            .field(
+                "sensors",
+                &self
+                    .sensors
+                    .iter()
+                    .map(|s| s.spec().kind)
+                    .collect::<Vec<_>>(),
+            )
+            .finish()
+    }
+}
+
+impl IsmConfig {
+    /// No sensors yet.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds a sensor (a [`VirtualScanner`], a [`crate::StoredSequence`], or any other
+    /// [`RangeSensor`]).
+    pub fn with_sensor(mut self, sensor: impl RangeSensor + 'static) -> Self {
+        self.sensors.push(Box::new(sensor));
+        self
+    }
+
+    /// A virtual Erim and a virtual Perceptron looking at `terrain` from the carriage of
+    /// `params`, with their default noise seeded by `seed` (the Perceptron by `seed + 1`).
+    pub fn simulated(terrain: Arc<HeightField>, params: &LegParams, seed: u64) -> Self {
+        Self::new()
+            .with_sensor(
+                VirtualScanner::new(SensorSpec::erim(), terrain.clone(), params).with_seed(seed),
+            )
+            .with_sensor(
+                VirtualScanner::new(SensorSpec::perceptron(), terrain, params)
+                    .with_seed(seed.wrapping_add(1)),
+            )
+    }
+
+    /// The kinds of sensor configured.
+    pub fn kinds(&self) -> Vec<SensorKind> {
+        self.sensors.iter().map(|s| s.spec().kind).collect()
+    }
+}
+
+type SharedSensor = Arc<Mutex<Box<dyn RangeSensor>>>;
+
+/// Connects the ISM module (`"ism"`) and serves `acquireImage`. Two sensors of one kind are a
+/// usage error.
+pub async fn connect(connector: &Connector, config: IsmConfig) -> Result<Module, ModuleError> {
+    let mut sensors: HashMap<SensorKind, SharedSensor> = HashMap::new();
+    for sensor in config.sensors {
+        let kind = sensor.spec().kind;
+        if sensors.insert(kind, Arc::new(Mutex::new(sensor))).is_some() {
+            return Err(ModuleError::Usage(format!(
+                "two {kind:?} sensors were configured for the ISM; configure one of each kind"
+            )));
+        }
+    }
+    let sensors = Arc::new(sensors);
+    Module::builder("ism")
+        .handle(move |ctx, request: AcquireImage| {
+            let sensors = sensors.clone();
+            async move { acquire(&ctx, &sensors, request.sensor).await }
+        })
+        .connect(connector)
+        .await
+}
+
+async fn acquire(
+    ctx: &tca_module::Context,
+    sensors: &HashMap<SensorKind, SharedSensor>,
+    kind: SensorKind,
+) -> Result<RangeImage, HandlerError> {
+    let sensor = sensors
+        .get(&kind)
+        .cloned()
+        .ok_or_else(|| HandlerError::from(crate::IsmError::NoSuchSensor(kind)))?;
+    let pose = carriage_pose(&ctx.query(&BodyPosition).await?);
+    let image = tokio::task::spawn_blocking(move || {
+        let mut sensor = sensor.lock().map_err(|_| {
+            HandlerError::new("the sensor's state was poisoned by an earlier panic")
+        })?;
+        sensor.acquire(&pose).map_err(HandlerError::from)
+    })
+    .await
+    .map_err(|e| HandlerError::new(format!("image acquisition did not finish: {e}")))??;
+    tracing::debug!(sensor = ?kind, sequence = image.sequence, y_m = pose.y_m, "image acquired");
+    Ok(image)
+}

@@ -1,0 +1,69 @@
+//! The LTM Manager as a TCA module: answers `mapRegion` ([`MapRegion`] -> [`MapGrid`]). When
+//! the request asks for a refresh, or no image has been merged yet, it first asks the ISM for
+//! an image (`acquireImage`) of the configured sensor and merges it. A bad region is refused
+//! before any image is taken.
+
+use std::sync::{Arc, Mutex};
+
+use tca_messages::walking::{AcquireImage, MapGrid, MapRegion};
+use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
+
+use crate::manager::{LtmConfig, TerrainMap};
+
+/// Connects the LTM Manager module (`"ltm"`) with an empty map and serves `mapRegion`.
+pub async fn connect(connector: &Connector, config: LtmConfig) -> Result<Module, ModuleError> {
+    let map = TerrainMap::new(config).map_err(|e| ModuleError::Usage(e.to_string()))?;
+    connect_with_map(connector, map).await
+}
+
+/// Connects the LTM Manager module serving an existing map (e.g. one loaded from a store
+/// directory, or built from stored images).
+pub async fn connect_with_map(
+    connector: &Connector,
+    map: TerrainMap,
+) -> Result<Module, ModuleError> {
+    let map = Arc::new(Mutex::new(map));
+    Module::builder("ltm")
+        .handle(move |ctx, request: MapRegion| {
+            let map = map.clone();
+            async move { map_region(&ctx, map, request).await }
+        })
+        .connect(connector)
+        .await
+}
+
+fn lock(map: &Mutex<TerrainMap>) -> Result<std::sync::MutexGuard<'_, TerrainMap>, HandlerError> {
+    map.lock()
+        .map_err(|_| HandlerError::new("the terrain map was poisoned by an earlier panic"))
+}
+
+async fn map_region(
+    ctx: &Context,
+    map: Arc<Mutex<TerrainMap>>,
+    request: MapRegion,
+) -> Result<MapGrid, HandlerError> {
+    let (needs_image, sensor) = {
+        let map = lock(&map)?;
+        map.check_region(&request)?;
+        (
+            request.refresh || map.images_merged() == 0,
+            map.config().sensor,
+        )
+    };
+    if needs_image {
+        let image = ctx.query(&AcquireImage { sensor }).await?;
+        let map = map.clone();
+        let report = tokio::task::spawn_blocking(move || {
+            lock(&map)?.add_image(&image).map_err(HandlerError::from)
+        })
+        .await
+        .map_err(|e| HandlerError::new(format!("map building did not finish: {e}")))??;
+        tracing::debug!(
+            changed = report.cells_changed,
+            "new image merged for a query"
+        );
+    }
+    tokio::task::spawn_blocking(move || lock(&map)?.query(&request).map_err(HandlerError::from))
+        .await
+        .map_err(|e| HandlerError::new(format!("the query did not finish: {e}")))?
+}

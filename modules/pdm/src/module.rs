@@ -1,0 +1,72 @@
+//! The PDM as a TCA module: handles the `renderMap` command ([`RenderMap`]) by asking the LTM
+//! Manager for the map (`mapRegion`) and writing the picture to the requested path. The same
+//! steps are available to command-line tools as [`render_map`].
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use tca_messages::walking::RenderMap;
+use tca_module::{Connector, HandlerError, Module, ModuleError};
+
+use crate::error::{PdmError, Result};
+use crate::render::{RenderOptions, write_png};
+
+/// Configuration of the PDM module.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PdmConfig {
+    /// How pictures are drawn.
+    pub render: RenderOptions,
+    /// Relative output paths are taken relative to this directory (`None`: the process's
+    /// working directory).
+    pub output_dir: Option<PathBuf>,
+}
+
+impl PdmConfig {
+    /// Where a requested path is written.
+    pub fn resolve(&self, path: &str) -> PathBuf {
+        let p = Path::new(path);
+        match &self.output_dir {
+            Some(dir) if p.is_relative() => dir.join(p),
+            _ => p.to_owned(),
+        }
+    }
+}
+
+/// Connects the PDM module (`"pdm"`) and handles `renderMap`.
+pub async fn connect(connector: &Connector, config: PdmConfig) -> Result<Module, ModuleError> {
+    let config = Arc::new(config);
+    Module::builder("pdm")
+        .handle(move |ctx, request: RenderMap| {
+            let config = config.clone();
+            async move {
+                let path = config.resolve(&request.path);
+                render_map(ctx.module(), &request, &config.render, &path)
+                    .await
+                    .map_err(HandlerError::from)?;
+                tracing::info!(path = %path.display(), kind = ?request.region.kind, "map drawn");
+                Ok(())
+            }
+        })
+        .connect(connector)
+        .await
+}
+
+/// Asks the LTM Manager (through `module`) for the region of `request` and writes its picture,
+/// with the request's overlays, to `path`. For command-line tools (`tca map ...`).
+pub async fn render_map(
+    module: &Module,
+    request: &RenderMap,
+    options: &RenderOptions,
+    path: &Path,
+) -> Result<()> {
+    let grid = module
+        .query(&request.region)
+        .await
+        .map_err(|e| PdmError::Map(e.to_string()))?;
+    let overlays = request.overlays.clone();
+    let options = options.clone();
+    let path = path.to_owned();
+    tokio::task::spawn_blocking(move || write_png(&path, &grid, &overlays, &options))
+        .await
+        .map_err(|e| PdmError::Encode(format!("drawing did not finish: {e}")))?
+}
