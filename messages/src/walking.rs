@@ -257,6 +257,9 @@ pub enum MapKind {
     Footfall,
     /// Mean slope over the foot's area, radians.
     Slope,
+    /// Whether the foot can reach each cell (value 1) or not (0), from the Leg Recovery
+    /// Planner.
+    Reachability,
 }
 
 /// One cell of a map.
@@ -369,13 +372,33 @@ pub struct Walk {
 }
 message!(Walk: goal "walk");
 
-/// Goal: plan one step (footfall and body move) and send its leg and body moves.
+/// Where a step starts, when it is planned ahead (concurrent walking): the carriage and the
+/// foot as the previous step will leave them.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StepStart {
+    /// Carriage Y after the previous body move.
+    pub body_y_m: f64,
+    /// The foot, planted at the previous footfall.
+    pub foot: WorldPoint,
+}
+
+/// Goal: plan one step (footfall and body move), send its leg and body moves, and the next
+/// step unless this one reaches the goal. Sent by the `walk` goal's handler for the first step
+/// and by each step for the next (Figure 5), under the `walk` node.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PlanStep {
     /// Step number, from 1.
     pub step: u32,
     /// Target world Y of the walk.
     pub goal_y_m: f64,
+    /// Sequential or concurrent stepping.
+    pub mode: WalkMode,
+    /// Where the step starts, when planned before the previous step has executed
+    /// (concurrent mode); `None`: ask the Controller.
+    pub start: Option<StepStart>,
+    /// The previous step's body move (concurrent mode): this step's leg move is planned and
+    /// executed only after it is achieved.
+    pub after_body_move: Option<crate::MessageId>,
 }
 message!(PlanStep: goal "planStep");
 
@@ -400,6 +423,9 @@ pub struct LegReachability {
     pub resolution_m: f64,
     /// The carriage Y during the move.
     pub body_y_m: f64,
+    /// Where the foot will start from, when planned ahead (concurrent walking); `None`: where
+    /// the leg is now.
+    pub start_foot: Option<WorldPoint>,
 }
 message!(LegReachability: query "legReachability" -> MapGrid);
 

@@ -39,6 +39,8 @@ pub(super) struct OpenException {
     at: u64,
     /// The module handling it now.
     handler: ModuleName,
+    /// Why the handlers that passed it up did so.
+    passed: Vec<String>,
 }
 
 impl Central {
@@ -72,7 +74,7 @@ impl Central {
             self.problem(None, Some(envelope.sender.clone()), reason, &[], out);
         }
         tracing::info!(exception = %envelope.name, node, "exception raised");
-        self.route_exception(envelope, node, Some(node), out);
+        self.route_exception(envelope, node, Some(node), Vec::new(), out);
     }
 
     /// Looks for a handler from `from` upwards; delivers, or fails the tree.
@@ -81,6 +83,7 @@ impl Central {
         envelope: Envelope,
         raised_at: u64,
         from: Option<u64>,
+        passed: Vec<String>,
         out: &mut Vec<Action>,
     ) {
         let mut chain: Vec<u64> = Vec::new();
@@ -96,7 +99,7 @@ impl Central {
             })
         });
         let Some((at, handler)) = found else {
-            return self.unhandled(envelope, raised_at, out);
+            return self.unhandled(envelope, raised_at, &passed, out);
         };
         let mut delivery = envelope.clone();
         delivery.node = Some(tca_messages::NodeId(at));
@@ -108,6 +111,7 @@ impl Central {
                 raised_at,
                 at,
                 handler: handler.clone(),
+                passed,
             },
         );
         match self.modules.get(&handler).and_then(|m| m.link) {
@@ -127,7 +131,7 @@ impl Central {
         &mut self,
         module: ModuleName,
         id: MessageId,
-        handled: bool,
+        outcome: Result<(), String>,
         out: &mut Vec<Action>,
     ) {
         let Some(open) = self.exceptions.remove(&id) else {
@@ -137,17 +141,26 @@ impl Central {
             self.exceptions.insert(id, open);
             return;
         }
-        if handled {
-            tracing::info!(exception = %open.envelope.name, node = open.at, "exception handled");
-            self.resume_after_exception(open.raised_at, id, out);
-        } else {
-            // Passed up: go on above the node it was attached at.
-            let above = self.tree.ancestors(open.at).next();
-            match above {
-                Some(parent) => {
-                    self.route_exception(open.envelope, open.raised_at, Some(parent), out)
+        match outcome {
+            Ok(()) => {
+                tracing::info!(exception = %open.envelope.name, node = open.at, "exception handled");
+                self.resume_after_exception(open.raised_at, id, out);
+            }
+            Err(reason) => {
+                // Passed up: go on above the node it was attached at.
+                let mut passed = open.passed;
+                passed.push(format!("{} passed it up: {reason}", open.handler));
+                let above = self.tree.ancestors(open.at).next();
+                match above {
+                    Some(parent) => self.route_exception(
+                        open.envelope,
+                        open.raised_at,
+                        Some(parent),
+                        passed,
+                        out,
+                    ),
+                    None => self.unhandled(open.envelope, open.raised_at, &passed, out),
                 }
-                None => self.unhandled(open.envelope, open.raised_at, out),
             }
         }
     }
@@ -163,11 +176,27 @@ impl Central {
     }
 
     /// Nobody handles it: the whole tree fails and its originator is told.
-    fn unhandled(&mut self, envelope: Envelope, raised_at: u64, out: &mut Vec<Action>) {
-        let reason = format!(
-            "unhandled exception {} raised by {} at node n{raised_at}",
+    fn unhandled(
+        &mut self,
+        envelope: Envelope,
+        raised_at: u64,
+        passed: &[String],
+        out: &mut Vec<Action>,
+    ) {
+        let data = self
+            .registry
+            .get(&envelope.name)
+            .and_then(|e| e.format.decode_value(&envelope.data).ok())
+            .map(|v| format!(": {v}"))
+            .unwrap_or_default();
+        let mut reason = format!(
+            "unhandled exception {} raised by {} at node n{raised_at}{data}",
             envelope.name, envelope.sender
         );
+        for p in passed {
+            reason.push_str("; ");
+            reason.push_str(p);
+        }
         tracing::warn!(%reason);
         self.fail_tree_of(raised_at, &envelope, reason, out);
     }

@@ -203,7 +203,14 @@ impl Central {
             return self.forward_answer(link, module, id, envelope, out);
         }
         if self.exceptions.contains_key(&id) {
-            return self.exception_done(module, id, envelope.class == Class::Success, out);
+            let outcome = if envelope.class == Class::Success {
+                Ok(())
+            } else {
+                Err(decode_data::<Failure>(&envelope.data)
+                    .map(|f| f.reason)
+                    .unwrap_or_else(|e| format!("failure with unreadable reason: {e}")))
+            };
+            return self.exception_done(module, id, outcome, out);
         }
         let Some(task) = self.tasks.get(&id) else {
             let reason = format!("{} ends {id}, which is not a live task", envelope.class);

@@ -35,6 +35,8 @@
 //! - [`picture`]: a PNG mosaic of the cost maps.
 //! - `serve.rs`: [`connect`] and [`GaitConfig`]: the module on the bus (the `planStep`
 //!   goal: queries, choice, `recoverLeg` then `bodyMove`, `stepPlanned`).
+//! - [`walk`]: the `walk` goal: stepping, sequential and concurrent constraints, and the
+//!   exception handlers (replan after a failed move, halt after a hardware fault).
 //! - [`error`]: the planning failures, [`GaitError`].
 //!
 //! # Frames and units
@@ -50,6 +52,7 @@ pub mod planner;
 pub mod region;
 mod serve;
 pub mod synthetic;
+pub mod walk;
 
 pub use error::{GaitError, Result};
 pub use maps::CostMaps;

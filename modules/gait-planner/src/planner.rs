@@ -16,7 +16,8 @@ use crate::params::GaitParams;
 use crate::region::{Direction, Region};
 
 /// The carriage counts as at the goal within this distance, metres.
-const AT_GOAL_M: f64 = 0.01;
+/// A carriage closer than this to the goal is at the goal, metres.
+pub const AT_GOAL_M: f64 = 0.01;
 /// A footfall must allow at least this much advance (or all that is left), metres.
 const MIN_ADVANCE_M: f64 = 0.05;
 

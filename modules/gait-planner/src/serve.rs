@@ -6,9 +6,9 @@
 //! Recovery Planner which cells the foot can reach (`legReachability`); chooses the footfall
 //! and the body move; sends `recoverLeg` (goal) and `bodyMove` (command) as children, the
 //! body move constrained to start only after the leg move is achieved; and informs
-//! `stepPlanned`. A step that cannot be planned ends the goal with failure, its reason
-//! saying why (the `walk` goal's handler decides what to do). The `walk` goal itself is the
-//! integrator's.
+//! `stepPlanned`; inside a walk it then sends the next step (see [`crate::walk`]). A step
+//! that cannot be planned ends the goal with failure, its reason saying why (the walk fails
+//! with it); a step at the goal does nothing and succeeds.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -25,9 +25,10 @@ use tca_module::{
 };
 use tca_robot::LegParams;
 
+use crate::error::GaitError;
 use crate::params::GaitParams;
 use crate::picture::cost_maps_picture;
-use crate::planner::{GaitMaps, GaitPlanner, StepPlan};
+use crate::planner::{AT_GOAL_M, GaitMaps, GaitPlanner, StepPlan};
 use crate::region::Direction;
 
 /// The module's default name.
@@ -49,6 +50,9 @@ pub struct GaitConfig {
     /// How many goals central may hand the module at once (more than 1 lets the next step
     /// be planned while the Walk goal is still being handled, for concurrent walking).
     pub capacity: u32,
+    /// How many times in a row a failed leg or body move is re-planned before the walk gives
+    /// up.
+    pub max_replans: u32,
 }
 
 impl Default for GaitConfig {
@@ -59,7 +63,8 @@ impl Default for GaitConfig {
             params: GaitParams::default(),
             picture_dir: None,
             simulated_time: false,
-            capacity: 2,
+            capacity: 4,
+            max_replans: 5,
         }
     }
 }
@@ -68,6 +73,7 @@ impl Default for GaitConfig {
 struct Shared {
     planner: Arc<GaitPlanner>,
     picture_dir: Option<PathBuf>,
+    walks: crate::walk::Walks,
 }
 
 /// Connects the Gait Planner to central under `config.module_name` and serves
@@ -76,34 +82,54 @@ struct Shared {
 pub async fn connect(connector: &Connector, config: GaitConfig) -> Result<Module, ModuleError> {
     let planner = GaitPlanner::new(config.leg.clone(), config.params)
         .map_err(|e| ModuleError::Usage(format!("gait planner configuration: {e}")))?;
+    let walks = crate::walk::Walks::default();
     let shared = Shared {
         planner: Arc::new(planner),
         picture_dir: config.picture_dir.clone(),
+        walks: walks.clone(),
     };
     tracing::info!(module = %config.module_name, "gait planner starting");
-    Module::builder(config.module_name.clone())
+    let builder = Module::builder(config.module_name.clone())
         .capacity(config.capacity)
         .simulated_time(config.simulated_time)
         .handle(move |ctx: Context, step: PlanStep| {
             let shared = shared.clone();
             async move { shared.plan_step(&ctx, step).await }
-        })
+        });
+    crate::walk::register(builder, walks, config.max_replans)
         .connect(connector)
         .await
 }
 
 impl Shared {
     async fn plan_step(&self, ctx: &Context, step: PlanStep) -> Result<(), HandlerError> {
-        let body = ctx.query(&BodyPosition).await?;
-        let foot = ctx.query(&GlobalLegPosition).await?;
+        if let (Some(walk), Some(me)) = (ctx.origin(), ctx.node()) {
+            self.walks.step_started(walk, me);
+        }
+        // Planned ahead (concurrent walking): start where the previous step will leave the
+        // carriage and the foot; otherwise ask the Controller where they are.
+        let (body_y_m, foot) = match step.start {
+            Some(start) => (start.body_y_m, start.foot),
+            None => (
+                ctx.query(&BodyPosition).await?.y_m,
+                ctx.query(&GlobalLegPosition).await?,
+            ),
+        };
         tracing::debug!(
             step = step.step,
-            body_y_m = body.y_m,
+            body_y_m,
             foot_y_m = foot.y_m,
             "planning a step"
         );
         let planner = &self.planner;
-        let region = planner.region(body.y_m, step.goal_y_m)?;
+        let region = match planner.region(body_y_m, step.goal_y_m) {
+            Ok(r) => r,
+            Err(GaitError::AtGoal { .. }) => {
+                tracing::info!(step = step.step, body_y_m, "at the goal: no step needed");
+                return Ok(());
+            }
+            Err(e) => return Err(e.into()),
+        };
         let polygon = planner.map_polygon(&region);
         let resolution_m = planner.params().grid.resolution_m;
         let footfall = ctx
@@ -127,7 +153,8 @@ impl Shared {
             .query(&LegReachability {
                 polygon: region.polygon(0.0),
                 resolution_m,
-                body_y_m: body.y_m,
+                body_y_m,
+                start_foot: step.start.map(|s| s.foot),
             })
             .await?;
         let footfall = TerrainMap::from_map_grid(&footfall)?;
@@ -135,12 +162,12 @@ impl Shared {
         let reachability = TerrainMap::from_map_grid(&reachability)?;
         let began = Instant::now();
         let planner = self.planner.clone();
-        let (body_y, goal_y) = (body.y_m, step.goal_y_m);
+        let goal_y = step.goal_y_m;
         let plan: StepPlan = tokio::task::spawn_blocking(move || {
             let reachable =
                 |p: Point2<f64>| reachability.value_at(p).known().is_some_and(|v| v >= 0.5);
             planner.plan(
-                body_y,
+                body_y_m,
                 goal_y,
                 &GaitMaps {
                     footfall: &footfall,
@@ -159,11 +186,17 @@ impl Shared {
             y_m: plan.footfall.y,
             z_m: plan.footfall.z,
         };
-        let leg = ctx.goal(&RecoverLeg {
-            footfall,
-            body_y_m: body.y_m,
-        })?;
-        ctx.send_task(
+        // The leg move. Planned ahead, it waits for the previous body move: the leg's
+        // trajectory starts from where that move leaves it.
+        let mut leg_options = SendOptions::default();
+        if let Some(previous) = step.after_body_move {
+            leg_options.constraints.push(ConstraintSpec::delay_planning(
+                TaskRef::Message(previous),
+                TaskRef::This,
+            ));
+        }
+        let leg = ctx.send_task(&RecoverLeg { footfall, body_y_m }, leg_options)?;
+        let body = ctx.send_task(
             &BodyMove {
                 target_y_m: plan.body_target_y_m,
             },
@@ -196,6 +229,14 @@ impl Shared {
             body_target_y_m = plan.body_target_y_m,
             "step planned"
         );
+        // Inside a walk (the step was sent in the context of the walk node), send the next
+        // step as this one's sibling, unless this one reaches the goal (Figure 5).
+        let reaches_goal = (plan.body_target_y_m - step.goal_y_m).abs() <= AT_GOAL_M;
+        if let (Some(walk), false) = (ctx.origin(), reaches_goal) {
+            let walk_ctx = ctx.in_context(Some(walk));
+            let next = crate::walk::next_step(&step, plan.body_target_y_m, footfall, body.id());
+            walk_ctx.send_task(&next, crate::walk::next_step_options(&step, &body))?;
+        }
         Ok(())
     }
 }

@@ -114,6 +114,7 @@ impl Shared {
         &self,
         ctx: &Context,
         body_y_m: f64,
+        start_foot: Option<WorldPoint>,
     ) -> Result<(TerrainMap, JointPosition), HandlerError> {
         let leg = self.planner.leg_params();
         let reach = leg.leg.upper_link_m + leg.leg.lower_link_m + 0.5;
@@ -129,8 +130,20 @@ impl Shared {
         };
         let map = ctx.query(&region).await?;
         let map = TerrainMap::from_map_grid(&map)?;
-        let joints = ctx.query(&JointLegPosition).await?;
-        Ok((map, joints_from_message(&joints)))
+        let joints = joints_from_message(&ctx.query(&JointLegPosition).await?);
+        let start = match start_foot {
+            // Planned ahead: the leg as it will be, on the elbow branch it is on now.
+            Some(foot) => self
+                .kin
+                .inverse_world(
+                    &CarriagePose::level(body_y_m),
+                    &Point3::new(foot.x_m, foot.y_m, foot.z_m),
+                    tca_robot::ElbowBranch::of(&joints),
+                )
+                .map_err(|e| HandlerError::new(format!("the planned start foot: {e}")))?,
+            None => joints,
+        };
+        Ok((map, start))
     }
 
     async fn recover_leg(&self, ctx: &Context, goal: RecoverLeg) -> Result<(), HandlerError> {
@@ -142,7 +155,7 @@ impl Shared {
                 "recoverLeg planned for another carriage position than the current one"
             );
         }
-        let (map, start) = self.inputs(ctx, goal.body_y_m).await?;
+        let (map, start) = self.inputs(ctx, goal.body_y_m, None).await?;
         let footfall = Point3::new(goal.footfall.x_m, goal.footfall.y_m, goal.footfall.z_m);
         let began = Instant::now();
         let planner = self.planner.clone();
@@ -199,7 +212,7 @@ impl Shared {
         query: LegReachability,
     ) -> Result<MapGrid, HandlerError> {
         let cells = region_grid(&query.polygon, query.resolution_m)?;
-        let (map, start) = self.inputs(ctx, query.body_y_m).await?;
+        let (map, start) = self.inputs(ctx, query.body_y_m, query.start_foot).await?;
         let planner = self.planner.clone();
         let body_y = query.body_y_m;
         let began = Instant::now();
@@ -218,15 +231,15 @@ impl Shared {
 }
 
 /// The `legReachability` answer over a region grid (`true` = inside the polygon): value 1
-/// where the foot can reach, 0 where it cannot, unknown outside the polygon. The wire has no
-/// map kind for reachability; the answer says [`MapKind::Footfall`].
+/// where the foot can reach, 0 where it cannot, unknown outside the polygon; map kind
+/// [`MapKind::Reachability`].
 pub fn reachability_map(
     cells: &tca_robot::Grid<bool>,
     reaches: impl Fn(Point2<f64>) -> bool,
 ) -> MapGrid {
     let o = cells.origin();
     MapGrid {
-        kind: MapKind::Footfall,
+        kind: MapKind::Reachability,
         origin_x_m: o.x,
         origin_y_m: o.y,
         resolution_m: cells.resolution_m(),

@@ -219,6 +219,7 @@ fn kind_name(kind: MapKind) -> &'static str {
         MapKind::ElevationUncertainty => "elevation-uncertainty",
         MapKind::Footfall => "footfall",
         MapKind::Slope => "slope",
+        MapKind::Reachability => "reachability",
     }
 }
 

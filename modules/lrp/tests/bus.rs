@@ -221,6 +221,7 @@ async fn leg_reachability_answers_a_binary_map() {
             polygon: polygon.clone(),
             resolution_m: 0.1,
             body_y_m: 2.0,
+            start_foot: None,
         }),
     )
     .await
@@ -250,6 +251,7 @@ async fn leg_reachability_answers_a_binary_map() {
             polygon: triangle,
             resolution_m: 0.1,
             body_y_m: 2.0,
+            start_foot: None,
         })
         .await
         .unwrap();
@@ -260,6 +262,7 @@ async fn leg_reachability_answers_a_binary_map() {
             polygon: polygon[..2].to_vec(),
             resolution_m: 0.1,
             body_y_m: 2.0,
+            start_foot: None,
         })
         .await
         .unwrap_err();

@@ -1,0 +1,198 @@
+//! The `walk` goal (Figure 5): the user's one message. Its handler attaches the Gait Planner
+//! as the handler of the Controller's exceptions on the walk node and sends the first
+//! `planStep`; each step sends the next as its sibling until the goal is reached
+//! ([`next_step`]). Sequential and concurrent walking differ only in constraints (§3.3):
+//!
+//! - **sequential**: step k+1 is planned only after step k's body move is achieved
+//!   (`delay_planning(bodyMove k, planStep k+1)`);
+//! - **concurrent**: step k+1 is planned at once, from where step k will leave the carriage
+//!   and the foot, while step k executes; its leg move waits for step k's body move
+//!   (`delay_planning(bodyMove k, recoverLeg k+1)`).
+//!
+//! In both, each leg move is achieved before its body move starts.
+//!
+//! Exceptions (§6.3): a failed leg or body move (`moveFailed`) ends the step: the handler adds
+//! a new step planned from where the leg is, then kills the steps in progress (patch, then
+//! kill). After `max_replans` failures in one walk it gives up: the exception passes up and
+//! the walk fails with the reason. A hardware fault (`hardwareFault`) halts the walk: the
+//! handler passes it up, so the whole task tree is killed and the user told why.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+use tca_messages::walking::{
+    HardwareFault, MoveFailed, PlanStep, StepStart, Walk, WalkMode, WorldPoint,
+};
+use tca_messages::{MessageId, NodeId};
+use tca_module::{
+    ConstraintSpec, Context, HandlerError, ModuleBuilder, SendOptions, Task, TaskRef,
+};
+
+/// What the module remembers of each walk in progress.
+#[derive(Debug, Clone)]
+struct WalkState {
+    goal_y_m: f64,
+    mode: WalkMode,
+    replans: u32,
+    steps_sent: u32,
+    /// Step nodes that have started, most recent last.
+    live_steps: Vec<NodeId>,
+}
+
+/// The walks in progress, by walk node.
+#[derive(Debug, Clone, Default)]
+pub struct Walks {
+    inner: Arc<Mutex<HashMap<NodeId, WalkState>>>,
+}
+
+impl Walks {
+    fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<NodeId, WalkState>> {
+        self.inner.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Records that a step started under `walk`.
+    pub fn step_started(&self, walk: NodeId, step: NodeId) {
+        if let Some(w) = self.lock().get_mut(&walk) {
+            w.live_steps.push(step);
+            w.steps_sent = w.steps_sent.max(w.live_steps.len() as u32);
+        }
+    }
+}
+
+/// Registers the `walk` goal and the exception handlers on a Gait Planner module builder.
+pub fn register(builder: ModuleBuilder, walks: Walks, max_replans: u32) -> ModuleBuilder {
+    let (w1, w2) = (walks.clone(), walks);
+    builder
+        .handle(move |ctx: Context, walk: Walk| {
+            let walks = w1.clone();
+            async move { start_walk(&ctx, walk, &walks).await }
+        })
+        .handle(move |ctx: Context, failure: MoveFailed| {
+            let walks = w2.clone();
+            async move { replan(&ctx, failure, &walks, max_replans).await }
+        })
+        .handle(|_ctx: Context, fault: HardwareFault| async move {
+            tracing::error!(detail = %fault.detail, "hardware fault: halting the walk");
+            // Passed up: nobody above handles it, so central kills the whole tree and tells
+            // the user why.
+            Err::<(), _>(HandlerError::new(format!(
+                "hardware fault: {}; the walk was halted",
+                fault.detail
+            )))
+        })
+}
+
+async fn start_walk(ctx: &Context, walk: Walk, walks: &Walks) -> Result<(), HandlerError> {
+    if !walk.goal_y_m.is_finite() {
+        return Err(HandlerError::new("the walk's goal is not a finite number"));
+    }
+    let node = ctx
+        .node()
+        .ok_or_else(|| HandlerError::new("a walk must be a task (sent as a goal)"))?;
+    ctx.on_exception::<MoveFailed>(node).await?;
+    ctx.on_exception::<HardwareFault>(node).await?;
+    walks.lock().insert(
+        node,
+        WalkState {
+            goal_y_m: walk.goal_y_m,
+            mode: walk.mode,
+            replans: 0,
+            steps_sent: 1,
+            live_steps: Vec::new(),
+        },
+    );
+    tracing::info!(goal_y_m = walk.goal_y_m, mode = ?walk.mode, "walk started");
+    ctx.goal(&PlanStep {
+        step: 1,
+        goal_y_m: walk.goal_y_m,
+        mode: walk.mode,
+        start: None,
+        after_body_move: None,
+    })?;
+    Ok(())
+}
+
+/// The step after `step`, which plans to leave the carriage at `body_target_y_m` and the foot
+/// at `footfall` with its body move `body_move`.
+pub fn next_step(
+    step: &PlanStep,
+    body_target_y_m: f64,
+    footfall: WorldPoint,
+    body_move: MessageId,
+) -> PlanStep {
+    let concurrent = step.mode == WalkMode::Concurrent;
+    PlanStep {
+        step: step.step + 1,
+        goal_y_m: step.goal_y_m,
+        mode: step.mode,
+        start: concurrent.then_some(StepStart {
+            body_y_m: body_target_y_m,
+            foot: footfall,
+        }),
+        after_body_move: concurrent.then_some(body_move),
+    }
+}
+
+/// The constraints the next step is sent with: sequentially, it is not planned before this
+/// step's body move is achieved.
+pub fn next_step_options(step: &PlanStep, body_move: &Task) -> SendOptions {
+    let mut options = SendOptions::default();
+    if step.mode == WalkMode::Sequential {
+        options.constraints.push(ConstraintSpec::delay_planning(
+            body_move.task_ref(),
+            TaskRef::This,
+        ));
+    }
+    options
+}
+
+/// `moveFailed` at the walk node: plan again from where the leg is.
+async fn replan(
+    ctx: &Context,
+    failure: MoveFailed,
+    walks: &Walks,
+    max_replans: u32,
+) -> Result<(), HandlerError> {
+    let walk = ctx
+        .node()
+        .ok_or_else(|| HandlerError::new("moveFailed delivered outside a walk"))?;
+    let (state, old_steps) = {
+        let mut all = walks.lock();
+        let Some(state) = all.get_mut(&walk) else {
+            return Err(HandlerError::new(format!(
+                "moveFailed for a walk this module does not know ({walk}): {}",
+                failure.detail
+            )));
+        };
+        state.replans += 1;
+        state.steps_sent += 1;
+        (state.clone(), std::mem::take(&mut state.live_steps))
+    };
+    tracing::warn!(
+        command = %failure.command,
+        kind = ?failure.kind,
+        detail = %failure.detail,
+        replans = state.replans,
+        "a move failed; planning the step again from where the leg is"
+    );
+    if state.replans > max_replans {
+        return Err(HandlerError::new(format!(
+            "{} moves failed in this walk (limit {max_replans}); the last: {} {:?}: {}",
+            state.replans, failure.command, failure.kind, failure.detail
+        )));
+    }
+    // Patch first (a new step under the walk), then kill the steps in progress.
+    ctx.goal(&PlanStep {
+        step: state.steps_sent,
+        goal_y_m: state.goal_y_m,
+        mode: state.mode,
+        start: None,
+        after_body_move: None,
+    })?;
+    for step in old_steps {
+        if let Err(e) = ctx.kill(step).await {
+            tracing::debug!(%step, %e, "step already finished");
+        }
+    }
+    Ok(())
+}
