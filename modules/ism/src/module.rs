@@ -18,6 +18,7 @@ use crate::spec::SensorSpec;
 #[derive(Default)]
 pub struct IsmConfig {
     sensors: Vec<Box<dyn RangeSensor>>,
+    simulated_time: bool,
 }
 
 impl std::fmt::Debug for IsmConfig {
@@ -61,6 +62,14 @@ impl IsmConfig {
             )
     }
 
+    /// Stamp messages with simulated time, charging each image its acquisition time (a
+    /// scanner frame: half a second at the Erim's and the Perceptron's 2 frames per second,
+    /// §2.2).
+    pub fn with_simulated_time(mut self, on: bool) -> Self {
+        self.simulated_time = on;
+        self
+    }
+
     /// The kinds of sensor configured.
     pub fn kinds(&self) -> Vec<SensorKind> {
         self.sensors.iter().map(|s| s.spec().kind).collect()
@@ -68,6 +77,9 @@ impl IsmConfig {
 }
 
 type SharedSensor = Arc<Mutex<Box<dyn RangeSensor>>>;
+
+/// How long a scanner takes for one frame (both scanners acquire 2 frames per second, §2.2).
+pub const FRAME_TIME: std::time::Duration = std::time::Duration::from_millis(500);
 
 /// Connects the ISM module (`"ism"`) and serves `acquireImage`. Two sensors of one kind are a
 /// usage error.
@@ -83,6 +95,7 @@ pub async fn connect(connector: &Connector, config: IsmConfig) -> Result<Module,
     }
     let sensors = Arc::new(sensors);
     Module::builder("ism")
+        .simulated_time(config.simulated_time)
         .handle(move |ctx, request: AcquireImage| {
             let sensors = sensors.clone();
             async move { acquire(&ctx, &sensors, request.sensor).await }
@@ -110,5 +123,6 @@ async fn acquire(
     .await
     .map_err(|e| HandlerError::new(format!("image acquisition did not finish: {e}")))??;
     tracing::debug!(sensor = ?kind, sequence = image.sequence, y_m = pose.y_m, "image acquired");
+    ctx.spend(FRAME_TIME);
     Ok(image)
 }

@@ -113,11 +113,26 @@ fn splitmix(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// A standard normal sample (Box–Muller).
-pub(crate) fn standard_normal(rng: &mut impl Rng) -> f64 {
-    let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
-    let u2: f64 = rng.random::<f64>();
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+/// Standard normal samples by the Box–Muller transform, which makes them in pairs: the
+/// second of each pair is kept for the next call.
+#[derive(Debug, Default)]
+pub(crate) struct Normal {
+    spare: Option<f64>,
+}
+
+impl Normal {
+    /// The next standard normal sample.
+    pub(crate) fn sample(&mut self, rng: &mut impl Rng) -> f64 {
+        if let Some(v) = self.spare.take() {
+            return v;
+        }
+        let u1: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
+        let u2: f64 = rng.random::<f64>();
+        let r = (-2.0 * u1.ln()).sqrt();
+        let (s, c) = (std::f64::consts::TAU * u2).sin_cos();
+        self.spare = Some(r * s);
+        r * c
+    }
 }
 
 #[cfg(test)]
@@ -127,12 +142,16 @@ mod tests {
     #[test]
     fn normal_samples_have_unit_variance() {
         let mut rng = row_rng(7, 0, 0);
+        let mut normal = Normal::default();
         let n = 20_000;
-        let xs: Vec<f64> = (0..n).map(|_| standard_normal(&mut rng)).collect();
+        let xs: Vec<f64> = (0..n).map(|_| normal.sample(&mut rng)).collect();
         let mean = xs.iter().sum::<f64>() / n as f64;
         let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
         assert!(mean.abs() < 0.03, "{mean}");
         assert!((var - 1.0).abs() < 0.05, "{var}");
+        // Consecutive samples (the two halves of a pair) are uncorrelated.
+        let cov = xs.chunks_exact(2).map(|p| p[0] * p[1]).sum::<f64>() / (n / 2) as f64;
+        assert!(cov.abs() < 0.03, "{cov}");
     }
 
     #[test]

@@ -17,7 +17,7 @@ use tca_robot::{CarriagePose, HeightField, LegParams};
 
 use crate::error::{IsmError, Result};
 use crate::frames::{body_from_global, to_wire};
-use crate::noise::{NoiseModel, ReflectanceModel, row_rng, standard_normal};
+use crate::noise::{NoiseModel, Normal, ReflectanceModel, row_rng};
 use crate::sensor::RangeSensor;
 use crate::spec::{PixelDirections, SensorSpec};
 
@@ -257,6 +257,7 @@ impl VirtualScanner {
         {
             let row = first_row + k;
             let mut rng = row_rng(self.seed, sequence, row as u32);
+            let mut normal = Normal::default();
             for (col, (range_px, refl_px)) in range_row.iter_mut().zip(refl_row).enumerate() {
                 let Some(d_locus) = self.directions.get(row, col) else {
                     continue;
@@ -266,13 +267,13 @@ impl VirtualScanner {
                     continue;
                 };
                 let noisy = if self.noise.range_sigma_at(true_range) > 0.0 {
-                    true_range + self.noise.range_sigma_at(true_range) * standard_normal(&mut rng)
+                    true_range + self.noise.range_sigma_at(true_range) * normal.sample(&mut rng)
                 } else {
                     true_range
                 };
                 *range_px = self.spec.range_count(noisy);
                 let b = if self.noise.reflectance_sigma > 0.0 {
-                    brightness + self.noise.reflectance_sigma * standard_normal(&mut rng)
+                    brightness + self.noise.reflectance_sigma * normal.sample(&mut rng)
                 } else {
                     brightness
                 };

@@ -73,7 +73,8 @@ pub struct BuilderConfig {
     pub erim_noise: NoiseModel,
     /// The Perceptron's range noise.
     pub perceptron_noise: NoiseModel,
-    /// Threads rasterising (at least 1).
+    /// Threads rasterising (at least 1). One by default: on the 2-core machines measured,
+    /// a second thread did not pay for itself (see BENCHMARKS.md).
     pub threads: usize,
     /// Largest number of cells a patch may have.
     pub max_cells: usize,
@@ -91,9 +92,7 @@ impl Default for BuilderConfig {
             max_sigma_m: 2.0,
             erim_noise: NoiseModel::default_for(SensorKind::Erim),
             perceptron_noise: NoiseModel::default_for(SensorKind::Perceptron),
-            threads: std::thread::available_parallelism()
-                .map(|n| n.get())
-                .unwrap_or(1),
+            threads: 1,
             max_cells: 16 << 20,
         }
     }

@@ -38,6 +38,9 @@ pub struct LtmConfig {
     pub cache_cells: usize,
     /// The sensor the module asks the ISM for when it needs an image.
     pub sensor: SensorKind,
+    /// Stamp the module's messages with simulated time, charging each query the wall-clock
+    /// time its map building and answering took.
+    pub simulated_time: bool,
 }
 
 impl Default for LtmConfig {
@@ -52,6 +55,7 @@ impl Default for LtmConfig {
             max_query_cells: 4 << 20,
             cache_cells: 8 << 20,
             sensor: SensorKind::Erim,
+            simulated_time: false,
         }
     }
 }

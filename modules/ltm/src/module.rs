@@ -22,8 +22,10 @@ pub async fn connect_with_map(
     connector: &Connector,
     map: TerrainMap,
 ) -> Result<Module, ModuleError> {
+    let simulated_time = map.config().simulated_time;
     let map = Arc::new(Mutex::new(map));
     Module::builder("ltm")
+        .simulated_time(simulated_time)
         .handle(move |ctx, request: MapRegion| {
             let map = map.clone();
             async move { map_region(&ctx, map, request).await }
@@ -50,20 +52,28 @@ async fn map_region(
             map.config().sensor,
         )
     };
+    let mut computing = std::time::Duration::ZERO;
     if needs_image {
         let image = ctx.query(&AcquireImage { sensor }).await?;
         let map = map.clone();
+        let began = std::time::Instant::now();
         let report = tokio::task::spawn_blocking(move || {
             lock(&map)?.add_image(&image).map_err(HandlerError::from)
         })
         .await
         .map_err(|e| HandlerError::new(format!("map building did not finish: {e}")))??;
+        computing += began.elapsed();
         tracing::debug!(
             changed = report.cells_changed,
             "new image merged for a query"
         );
     }
-    tokio::task::spawn_blocking(move || lock(&map)?.query(&request).map_err(HandlerError::from))
-        .await
-        .map_err(|e| HandlerError::new(format!("the query did not finish: {e}")))?
+    let began = std::time::Instant::now();
+    let answer = tokio::task::spawn_blocking(move || {
+        lock(&map)?.query(&request).map_err(HandlerError::from)
+    })
+    .await
+    .map_err(|e| HandlerError::new(format!("the query did not finish: {e}")))?;
+    ctx.spend(computing + began.elapsed());
+    answer
 }

@@ -356,3 +356,19 @@ fn wrapped_ranges_are_unwrapped_into_the_elevation_band() {
         z.iter().fold(0f32, |m, v| m.max(v.abs()))
     );
 }
+
+#[test]
+fn the_map_does_not_depend_on_the_builders_thread_count() {
+    let s = scanner(SensorSpec::perceptron(), terrain(&[BOX]), true, 8);
+    let img = image(&s, 1.0, 0);
+    let one = build_map(&img, &BuilderConfig::default()).unwrap();
+    let three = build_map(
+        &img,
+        &BuilderConfig {
+            threads: 3,
+            ..BuilderConfig::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(one, three);
+}
