@@ -61,14 +61,18 @@ fn raw_tokio(c: &mut Criterion, rt: &Runtime) {
 fn raw_zenoh(c: &mut Criterion, rt: &Runtime) {
     let endpoint = free_endpoint();
     let (router, asker, _queryable) = rt.block_on(async {
-        let router =
-            zenoh::open(tca_central::zenoh_transport::router_config(&[endpoint.clone()]).unwrap())
-                .await
-                .unwrap();
+        let router = zenoh::open(
+            tca_central::zenoh_transport::router_config(std::slice::from_ref(&endpoint)).unwrap(),
+        )
+        .await
+        .unwrap();
         let client = || async {
-            zenoh::open(tca_central::zenoh_transport::client_config(&[endpoint.clone()]).unwrap())
-                .await
-                .unwrap()
+            zenoh::open(
+                tca_central::zenoh_transport::client_config(std::slice::from_ref(&endpoint))
+                    .unwrap(),
+            )
+            .await
+            .unwrap()
         };
         let answerer = client().await;
         let queryable = answerer

@@ -8,8 +8,10 @@
 //! - [`launch`]: launch files for `tca up`.
 //! - [`ping`]: timing query round trips through central.
 //! - [`timeline`]: the per-module timeline of Figure 18, as text and PNG.
+//! - [`walk`]: `tca walk`: the walking system assembled, walked, and reported.
 
 pub mod builtin;
 pub mod launch;
 pub mod ping;
 pub mod timeline;
+pub mod walk;

@@ -15,7 +15,7 @@
 //! - [`show`]: rendering a log as readable lines with filters.
 //! - [`stats`]: the Figure 18 breakdown (computing, waiting, idle per module), latencies.
 //! - [`export`]: a JSON-encoded copy of a log for Foxglove Studio.
-//! - [`error`]: [`LogError`].
+//! - [`error`][]: [`LogError`].
 
 pub mod error;
 pub mod export;

@@ -49,10 +49,11 @@ pub fn render(log: &LogFile, filter: &ShowFilter) -> Vec<String> {
                     Direction::In => (peer, "central".to_owned()),
                     Direction::Out => (envelope.sender.to_string(), peer),
                 };
-                if let Some(m) = &filter.module {
-                    if &from != m && &to != m {
-                        continue;
-                    }
+                if let Some(m) = &filter.module
+                    && &from != m
+                    && &to != m
+                {
+                    continue;
                 }
                 if filter
                     .name

@@ -131,15 +131,14 @@ pub fn stats(log: &LogFile, base: TimeBase) -> LogStats {
                 *by_name.entry(env.name.to_string()).or_default() += 1;
             }
             (Direction::In, Class::Reply | Class::Success | Class::Failure) => {
-                if let Some(id) = env.correlation {
-                    if let Some(open) = handled.remove(&id) {
-                        if open.module == peer {
-                            *counts.entry(peer.clone()).or_default() += 1;
-                            busy.entry(peer)
-                                .or_default()
-                                .push((open.start, t.max(open.start)));
-                        }
-                    }
+                if let Some(id) = env.correlation
+                    && let Some(open) = handled.remove(&id)
+                    && open.module == peer
+                {
+                    *counts.entry(peer.clone()).or_default() += 1;
+                    busy.entry(peer)
+                        .or_default()
+                        .push((open.start, t.max(open.start)));
                 }
             }
             (Direction::In, Class::Query) => {

@@ -7,6 +7,7 @@ mod ping;
 mod registry;
 mod tree;
 mod up;
+mod walk;
 
 use std::process::ExitCode;
 
@@ -23,6 +24,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Walk the leg down an obstacle course, autonomously, and report what happened.
+    Walk(walk::WalkArgs),
     /// Run central control, serving modules over zenoh.
     Central(central::CentralArgs),
     /// Run one built-in module as its own process.
@@ -84,6 +87,7 @@ pub(crate) fn main() -> ExitCode {
     };
     let result = runtime.block_on(async move {
         match cli.command {
+            Command::Walk(args) => walk::run(args).await,
             Command::Central(args) => central::run(args).await,
             Command::Module(args) => module::run(args).await,
             Command::Up(args) => up::run(args).await,

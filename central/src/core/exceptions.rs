@@ -203,10 +203,10 @@ impl Central {
 
     fn fail_tree_of(&mut self, node: u64, cause: &Envelope, reason: String, out: &mut Vec<Action>) {
         let root = self.tree.ancestors(node).last().unwrap_or(node);
-        if let Some(id) = self.node_task.get(&root).copied() {
-            if let Some(task) = self.tasks.get_mut(&id) {
-                task.failure = Some(reason.clone());
-            }
+        if let Some(id) = self.node_task.get(&root).copied()
+            && let Some(task) = self.tasks.get_mut(&id)
+        {
+            task.failure = Some(reason.clone());
         }
         self.problem(None, Some(cause.sender.clone()), reason, &[], out);
         match self.tree.kill(root, self.now, Some(cause.id.0), out) {
@@ -252,11 +252,11 @@ impl Central {
         let events = self
             .tree
             .retry(retry.node.0, self.now, Some(request.id.0), out)?;
-        if let Some(id) = self.node_task.get(&retry.node.0).copied() {
-            if let Some(t) = self.tasks.get_mut(&id) {
-                t.running = false;
-                t.envelope.redelivery += 1;
-            }
+        if let Some(id) = self.node_task.get(&retry.node.0).copied()
+            && let Some(t) = self.tasks.get_mut(&id)
+        {
+            t.running = false;
+            t.envelope.redelivery += 1;
         }
         self.tree_events(events, out);
         Ok(())

@@ -45,15 +45,15 @@ impl Central {
             let reason = "the module name \"central\" is reserved; choose another".to_owned();
             return self.refuse(link, &envelope, reason, out);
         }
-        if let Some(existing) = self.modules.get(&hello.module) {
-            if let Some(other) = existing.link {
-                let reason = format!(
-                    "a module named {} is already connected (link {other}, pid {} on {}); \
+        if let Some(existing) = self.modules.get(&hello.module)
+            && let Some(other) = existing.link
+        {
+            let reason = format!(
+                "a module named {} is already connected (link {other}, pid {} on {}); \
                      choose another name or stop that one first",
-                    hello.module, existing.hello.pid, existing.hello.host
-                );
-                return self.refuse(link, &envelope, reason, out);
-            }
+                hello.module, existing.hello.pid, existing.hello.host
+            );
+            return self.refuse(link, &envelope, reason, out);
         }
         let capacity = if hello.capacity == 0 {
             self.config.default_capacity.max(1)

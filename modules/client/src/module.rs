@@ -104,6 +104,7 @@ impl Task {
 }
 
 impl Module {
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
         name: ModuleName,
         link_no: u32,
@@ -538,11 +539,11 @@ impl Module {
     fn on_control(&self, envelope: Envelope) {
         match envelope.name.as_str() {
             names::CANCEL => {
-                if let Ok(cancel) = decode_data::<Cancel>(&envelope.data) {
-                    if let Some(h) = lock(&self.shared.running).remove(&cancel.node) {
-                        tracing::info!(node = %cancel.node, "handler cancelled by central");
-                        h.abort();
-                    }
+                if let Ok(cancel) = decode_data::<Cancel>(&envelope.data)
+                    && let Some(h) = lock(&self.shared.running).remove(&cancel.node)
+                {
+                    tracing::info!(node = %cancel.node, "handler cancelled by central");
+                    h.abort();
                 }
             }
             names::TASK_ENDED => {

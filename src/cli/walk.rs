@@ -1,0 +1,125 @@
+//! `tca walk`: the main job.
+
+use std::io::IsTerminal as _;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::Args;
+use tca::walk::{Progress, TerrainChoice, WalkOptions};
+use tca_messages::walking::WalkMode;
+use tokio::sync::mpsc;
+
+#[derive(Debug, Args)]
+pub(crate) struct WalkArgs {
+    /// Built-in obstacle course 1, 2, 3 or 4 (§7), or "random" (a course from --seed).
+    #[arg(long, default_value = "3", conflicts_with = "terrain")]
+    course: String,
+    /// Walk on a terrain loaded from an ESRI ASCII grid (.asc) file instead.
+    #[arg(long, value_name = "FILE.asc")]
+    terrain: Option<PathBuf>,
+    /// Carriage goal along the rails, metres (the rails run from 0.5 to 10.5 m).
+    #[arg(long, value_name = "METRES")]
+    goal: Option<f64>,
+    /// Then walk back to the start, using the maps made walking forward.
+    #[arg(long)]
+    backward: bool,
+    /// Plan the next step while this one executes (§3.3, §7.2).
+    #[arg(long)]
+    concurrent: bool,
+    /// Seed of the random course and of the scanner noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Directory for the traffic log and the pictures.
+    #[arg(long, value_name = "DIR", default_value = "out/walk")]
+    out: PathBuf,
+    /// Also write every step's cost maps and leg search as pictures (in DIR/steps).
+    #[arg(long)]
+    pictures: bool,
+    /// Walk with the modules already running behind central at this zenoh endpoint
+    /// (`tca up walk.toml`); the log and pictures are then central's and the modules'.
+    #[arg(long, value_name = "ENDPOINT")]
+    connect: Option<String>,
+    /// Print the summary as one JSON object on the last line of stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
+    let terrain = match (&args.terrain, args.course.as_str()) {
+        (Some(path), _) => TerrainChoice::File(path.clone()),
+        (None, "random") => TerrainChoice::Random(args.seed),
+        (None, n) => match n.parse::<u32>() {
+            Ok(n @ 1..=4) => TerrainChoice::Course(n),
+            _ => anyhow::bail!("--course must be 1, 2, 3, 4 or random (got {n:?})"),
+        },
+    };
+    let options = WalkOptions {
+        terrain,
+        goal_y_m: args.goal,
+        backward: args.backward,
+        mode: if args.concurrent {
+            WalkMode::Concurrent
+        } else {
+            WalkMode::Sequential
+        },
+        seed: args.seed,
+        out: args.connect.is_none().then(|| args.out.clone()),
+        step_pictures: args.pictures,
+        connect: args.connect.clone(),
+    };
+    let (tx, rx) = mpsc::unbounded_channel();
+    let display = tokio::spawn(show_progress(rx));
+    let result = tca::walk::walk(&options, tx).await;
+    let _ = display.await;
+    let report = result?;
+    print!("{}", tca::walk::report::summary(&report));
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    }
+    Ok(if report.reached {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(2)
+    })
+}
+
+/// Draws a progress bar on a terminal, one line per step otherwise (stderr).
+async fn show_progress(mut rx: mpsc::UnboundedReceiver<Progress>) {
+    let tty = std::io::stderr().is_terminal();
+    let (mut from, mut goal) = (0.0f64, 1.0f64);
+    while let Some(p) = rx.recv().await {
+        match p {
+            Progress::Leg { goal_y_m, from_y_m } => {
+                from = from_y_m;
+                goal = goal_y_m;
+                if tty {
+                    eprintln!();
+                }
+                eprintln!("walking from y = {from_y_m:.2} m to y = {goal_y_m:.2} m");
+            }
+            Progress::Step(s) => {
+                let total = (goal - from).abs().max(1e-9);
+                let done = ((s.body_target_y_m - from).abs() / total).clamp(0.0, 1.0);
+                let width = 30;
+                let filled = (done * width as f64).round() as usize;
+                let bar = format!("[{}{}]", "#".repeat(filled), "-".repeat(width - filled));
+                let line = format!(
+                    "{bar} {:>3.0}%  step {:>2}: foot at ({:.2}, {:.2}) m, carriage to {:.2} m",
+                    done * 100.0,
+                    s.step,
+                    s.footfall.x_m,
+                    s.footfall.y_m,
+                    s.body_target_y_m
+                );
+                if tty {
+                    eprint!("\r{line}");
+                } else {
+                    eprintln!("{line}");
+                }
+            }
+        }
+    }
+    if tty {
+        eprintln!();
+    }
+}

@@ -1,0 +1,134 @@
+//! The walking system's modules: one function per module to connect it with the settings a
+//! walk uses, shared by `tca walk` (all in this process) and `tca module NAME` (one process
+//! each, over zenoh).
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use tca_controller_sim::{ControllerConfig, SpeedFactor};
+use tca_gait_planner::GaitConfig;
+use tca_ism::IsmConfig;
+use tca_lrp::LrpConfig;
+use tca_ltm::LtmConfig;
+use tca_module::{Connector, Module, ModuleError};
+use tca_pdm::PdmConfig;
+use tca_robot::{HeightField, LegParams};
+
+use super::terrain::{START_Y_M, TerrainChoice, find_start};
+
+/// What the modules of one walking system share.
+#[derive(Clone, Debug)]
+pub struct SystemSetup {
+    /// The terrain (the simulator's truth and the virtual scanner's scene).
+    pub terrain: Arc<HeightField>,
+    /// Which terrain it is.
+    pub choice: TerrainChoice,
+    /// Seed of the scanner noise.
+    pub seed: u64,
+    /// Where pictures go (the PDM's output directory; per-step planner pictures in
+    /// `steps/` below it when `step_pictures`).
+    pub out: Option<PathBuf>,
+    /// Write the planners' per-step pictures.
+    pub step_pictures: bool,
+    /// The simulator's speed.
+    pub speed: SpeedFactor,
+}
+
+impl SystemSetup {
+    /// Loads the terrain.
+    pub fn new(choice: TerrainChoice, seed: u64) -> anyhow::Result<Self> {
+        Ok(SystemSetup {
+            terrain: Arc::new(choice.load()?),
+            choice,
+            seed,
+            out: None,
+            step_pictures: false,
+            speed: SpeedFactor::AsFastAsPossible,
+        })
+    }
+
+    fn steps_dir(&self) -> Option<PathBuf> {
+        let dir = self.out.as_ref()?.join("steps");
+        (self.step_pictures && std::fs::create_dir_all(&dir).is_ok()).then_some(dir)
+    }
+}
+
+/// Names of the walking modules, in the order they are connected.
+pub const WALKING_MODULES: &[&str] = &["controller", "ism", "ltm", "pdm", "lrp", "gait"];
+
+fn usage(e: impl std::fmt::Display) -> ModuleError {
+    ModuleError::Usage(e.to_string())
+}
+
+/// Connects one walking module. Every module keeps simulated time, so the durations reported
+/// are those of the mechanism (§7.2) however fast the simulation runs.
+pub async fn connect_module(
+    name: &str,
+    connector: &Connector,
+    setup: &SystemSetup,
+) -> Result<Module, ModuleError> {
+    let params = LegParams::default();
+    match name {
+        "controller" => {
+            let start = find_start(&setup.terrain, &params, START_Y_M).map_err(usage)?;
+            let mut config =
+                ControllerConfig::new((*setup.terrain).clone(), start).with_speed(setup.speed);
+            config.bus_simulated_time = true;
+            tca_controller_sim::connect(connector, config).await
+        }
+        "ism" => {
+            let config = IsmConfig::simulated(setup.terrain.clone(), &params, setup.seed)
+                .with_simulated_time(true);
+            tca_ism::connect(connector, config).await
+        }
+        "ltm" => {
+            // The Perceptron: the Erim's 7.6 cm range steps make every patch look rough
+            // (§1: the scanner "did not have sufficient resolution and accuracy").
+            let config = LtmConfig {
+                simulated_time: true,
+                sensor: tca_messages::walking::SensorKind::Perceptron,
+                ..LtmConfig::default()
+            };
+            tca_ltm::connect(connector, config).await
+        }
+        "pdm" => {
+            let config = PdmConfig {
+                output_dir: setup.out.clone(),
+                ..PdmConfig::default()
+            };
+            tca_pdm::connect(connector, config).await
+        }
+        "lrp" => {
+            let config = LrpConfig {
+                picture_dir: setup.steps_dir(),
+                simulated_time: true,
+                ..LrpConfig::default()
+            };
+            tca_lrp::connect(connector, config).await
+        }
+        "gait" => {
+            let config = GaitConfig {
+                picture_dir: setup.steps_dir(),
+                simulated_time: true,
+                ..GaitConfig::default()
+            };
+            tca_gait_planner::connect(connector, config).await
+        }
+        other => Err(ModuleError::Usage(format!(
+            "no walking module named {other:?}; they are {}",
+            WALKING_MODULES.join(", ")
+        ))),
+    }
+}
+
+/// Connects all the walking modules.
+pub async fn connect_all(
+    connector: &Connector,
+    setup: &SystemSetup,
+) -> Result<Vec<Module>, ModuleError> {
+    let mut modules = Vec::new();
+    for name in WALKING_MODULES {
+        modules.push(connect_module(name, connector, setup).await?);
+    }
+    Ok(modules)
+}
