@@ -1,0 +1,120 @@
+//! The mission's promise: the leg walks down the obstacle courses autonomously, without
+//! striking anything; concurrent walking saves time; an impassable course stops safely.
+
+mod common;
+
+use common::within;
+use tca::walk::{TerrainChoice, WalkOptions, WalkReport};
+use tca_messages::walking::WalkMode;
+use tokio::sync::mpsc;
+
+fn options(terrain: TerrainChoice, seed: u64) -> WalkOptions {
+    WalkOptions {
+        terrain,
+        goal_y_m: None,
+        backward: false,
+        mode: WalkMode::Sequential,
+        seed,
+        out: None,
+        step_pictures: false,
+        connect: None,
+    }
+}
+
+async fn walk(options: WalkOptions) -> WalkReport {
+    let (tx, _rx) = mpsc::unbounded_channel();
+    within("walk", tca::walk::walk(&options, tx))
+        .await
+        .expect("the walk runs")
+}
+
+fn assert_clean(report: &WalkReport) {
+    assert!(
+        report.reached,
+        "{}: {:?}\n{report:#?}",
+        report.terrain, report.reason
+    );
+    assert_eq!(report.collisions, 0, "{report:#?}");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_course_is_walked_forward_without_a_collision() {
+    for course in 1..=4 {
+        for seed in [1, 2, 3] {
+            let report = walk(options(TerrainChoice::Course(course), seed)).await;
+            assert_clean(&report);
+            assert!(report.distance_m >= 8.0, "{report:#?}");
+            assert!(report.steps >= 5, "{report:#?}");
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_course_is_walked_forward_and_back_on_the_maps_of_the_way_out() {
+    for course in 1..=4 {
+        for seed in [1, 2] {
+            let report = walk(WalkOptions {
+                backward: true,
+                ..options(TerrainChoice::Course(course), seed)
+            })
+            .await;
+            assert_clean(&report);
+            assert_eq!(report.legs.len(), 2);
+            assert!(
+                (report.final_y_m - report.start_y_m).abs() < 0.05,
+                "{report:#?}"
+            );
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn random_courses_are_walked_without_a_collision() {
+    for seed in [11, 12, 13] {
+        let report = walk(options(TerrainChoice::Random(seed), seed)).await;
+        assert_clean(&report);
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn concurrent_walking_takes_less_simulated_time_than_sequential() {
+    let sequential = walk(options(TerrainChoice::Course(3), 1)).await;
+    let concurrent = walk(WalkOptions {
+        mode: WalkMode::Concurrent,
+        ..options(TerrainChoice::Course(3), 1)
+    })
+    .await;
+    assert_clean(&sequential);
+    assert_clean(&concurrent);
+    assert!(
+        concurrent.sim_time_s < sequential.sim_time_s,
+        "concurrent {} s vs sequential {} s",
+        concurrent.sim_time_s,
+        sequential.sim_time_s
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_impassable_course_stops_safely_and_says_why() {
+    // A wall 1.6 m tall across the whole pit at y = 4 m: the leg can neither step over it nor
+    // go around it.
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("wall.asc");
+    let (nx, ny, cell) = (121usize, 221usize, 0.05);
+    let mut text = format!(
+        "ncols {nx}\nnrows {ny}\nxllcenter 0\nyllcenter 0\ncellsize {cell}\nNODATA_value -9999\n"
+    );
+    for row in 0..ny {
+        let y = (ny - 1 - row) as f64 * cell;
+        let h = if (4.0..4.3).contains(&y) { 1.6 } else { 0.0 };
+        let line: Vec<String> = (0..nx).map(|_| format!("{h}")).collect();
+        text.push_str(&line.join(" "));
+        text.push('\n');
+    }
+    std::fs::write(&path, text).unwrap();
+    let report = walk(options(TerrainChoice::File(path), 1)).await;
+    assert!(!report.reached, "{report:#?}");
+    assert_eq!(report.collisions, 0, "{report:#?}");
+    assert!(report.reason.is_some());
+    assert!(report.final_y_m < 4.0);
+}
