@@ -10,10 +10,25 @@ use super::ConnectArgs;
 
 #[derive(Debug, Args)]
 pub(crate) struct ModuleArgs {
-    /// The built-in module to run (echo).
+    /// The built-in module to run: echo, controller, ism, ltm, pdm, lrp or gait.
     name: String,
     #[command(flatten)]
     connect: ConnectArgs,
+    /// The terrain of the walking modules: course 1, 2, 3, 4 or random (from --seed).
+    #[arg(long, default_value = "3", conflicts_with = "terrain")]
+    course: String,
+    /// The terrain from an ESRI ASCII grid (.asc) file instead.
+    #[arg(long, value_name = "FILE.asc")]
+    terrain: Option<std::path::PathBuf>,
+    /// Seed of the random course and of the scanner noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Directory for pictures (the PDM's output; the planners' step pictures).
+    #[arg(long, value_name = "DIR")]
+    out: Option<std::path::PathBuf>,
+    /// Write the planners' per-step pictures.
+    #[arg(long)]
+    pictures: bool,
 }
 
 pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
@@ -24,7 +39,21 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
         .or_else(|| std::env::var("TCA_CONNECT").ok())
         .unwrap_or_else(|| args.connect.endpoint_or_default());
     let connector = Connector::zenoh(endpoint.clone());
-    let module = tca::builtin::connect(&args.name, &connector)
+    let terrain = match (&args.terrain, args.course.as_str()) {
+        (Some(path), _) => tca::walk::TerrainChoice::File(path.clone()),
+        (None, "random") => tca::walk::TerrainChoice::Random(args.seed),
+        (None, n) => match n.parse::<u32>() {
+            Ok(n @ 1..=4) => tca::walk::TerrainChoice::Course(n),
+            _ => anyhow::bail!("--course must be 1, 2, 3, 4 or random (got {n:?})"),
+        },
+    };
+    let options = tca::builtin::ModuleOptions {
+        terrain,
+        seed: args.seed,
+        out: args.out.clone(),
+        pictures: args.pictures,
+    };
+    let module = tca::builtin::connect(&args.name, &connector, &options)
         .await
         .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
     eprintln!("module {} connected to central at {endpoint}", args.name);

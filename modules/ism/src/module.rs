@@ -32,6 +32,7 @@ impl std::fmt::Debug for IsmConfig {
                     .map(|s| s.spec().kind)
                     .collect::<Vec<_>>(),
             )
+            .field("simulated_time", &self.simulated_time)
             .finish()
     }
 }

@@ -38,9 +38,17 @@ fn leg_poses(params: &LegParams) -> Vec<CalibrationPose> {
     poses
 }
 
+/// The robot parameters with the scanner pitched 35° down: the leg poses below are in the
+/// Perceptron's view from that mount.
+fn params() -> LegParams {
+    let mut p = LegParams::default();
+    p.scanner.pitch_down_rad = 35f64.to_radians();
+    p
+}
+
 #[test]
 fn calibration_recovers_a_known_mount() {
-    let params = LegParams::default();
+    let params = params();
     let terrain = Arc::new(
         HeightField::flat(Point2::new(-5.0, -5.0), Point2::new(12.0, 20.0), 0.1, 0.0).unwrap(),
     );
@@ -73,7 +81,7 @@ fn calibration_recovers_a_known_mount() {
 
 #[test]
 fn a_target_out_of_view_is_reported() {
-    let params = LegParams::default();
+    let params = params();
     let terrain = Arc::new(
         HeightField::flat(Point2::new(-5.0, -5.0), Point2::new(12.0, 20.0), 0.1, 0.0).unwrap(),
     );

@@ -51,6 +51,9 @@ use crate::cell::Cell;
 use crate::error::{LtmError, Result, check_resolution};
 use crate::patch::{Patch, lattice_index};
 
+/// Largest distance of the scanner from the world origin accepted, metres.
+pub const MAX_SCANNER_DISTANCE_M: f64 = 1e6;
+
 /// Parameters of the builder.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BuilderConfig {
@@ -140,6 +143,13 @@ impl BuilderConfig {
                 "noise parameters must be finite and non-negative".into(),
             ));
         }
+        if !(self.resolution_m >= 1e-4 && self.max_horizontal_range_m <= 1e4) {
+            return Err(LtmError::Config(format!(
+                "a map resolution of at least 0.1 mm and a range of at most 10 km are supported \
+                 (got {} m and {} m)",
+                self.resolution_m, self.max_horizontal_range_m
+            )));
+        }
         if !(0.0..std::f64::consts::FRAC_PI_2).contains(&self.min_grazing_rad) {
             return Err(LtmError::Config(format!(
                 "min_grazing_rad {} must be in [0, pi/2)",
@@ -175,6 +185,15 @@ pub fn build_map(image: &RangeImage, config: &BuilderConfig) -> Result<Patch> {
     let spec = SensorSpec::of(image.sensor);
     spec.check_image(image)?;
     let frames = ImageFrames::of(image)?;
+    let origin = frames.global_from_locus() * Point3::origin();
+    if origin.coords.norm() > MAX_SCANNER_DISTANCE_M || !origin.coords.norm().is_finite() {
+        return Err(LtmError::ScannerTooFar {
+            x_m: origin.x,
+            y_m: origin.y,
+            z_m: origin.z,
+            limit_m: MAX_SCANNER_DISTANCE_M,
+        });
+    }
     let points = image_points(image, &spec, &frames, config);
     let res = config.resolution_m;
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);

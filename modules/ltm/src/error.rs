@@ -25,6 +25,36 @@ pub enum LtmError {
         /// Its Y, metres.
         y_m: f64,
     },
+    /// A polygon corner is so far away that its cell index would overflow.
+    #[error(
+        "polygon corner ({x_m}, {y_m}) is beyond the map's reach at {resolution_m} m cells; \
+         give coordinates within {limit_m} m of the origin"
+    )]
+    CornerTooFar {
+        /// Its X, metres.
+        x_m: f64,
+        /// Its Y, metres.
+        y_m: f64,
+        /// The resolution asked for.
+        resolution_m: f64,
+        /// Largest coordinate accepted at that resolution, metres.
+        limit_m: f64,
+    },
+    /// An image's transforms put the scanner absurdly far away.
+    #[error(
+        "the image's transforms put the scanner at ({x_m:.1}, {y_m:.1}, {z_m:.1}) m, more than \
+         {limit_m} m from the world origin; check the calibration and the body pose"
+    )]
+    ScannerTooFar {
+        /// Scanner X, metres.
+        x_m: f64,
+        /// Scanner Y, metres.
+        y_m: f64,
+        /// Scanner Z, metres.
+        z_m: f64,
+        /// Largest distance accepted, metres.
+        limit_m: f64,
+    },
     /// A polygon encloses no area.
     #[error(
         "the polygon's corners are all on one line (zero area); give corners that enclose the \
@@ -65,6 +95,13 @@ pub enum LtmError {
         /// The map's resolution.
         map_m: f64,
     },
+    /// The LTM Manager does not make maps of this kind.
+    #[error(
+        "the LTM Manager does not make {0:?} maps (it makes elevation, elevation with \
+         uncertainty, footfall and slope maps); reachability maps come from the Leg Recovery \
+         Planner (legReachability)"
+    )]
+    UnsupportedKind(tca_messages::walking::MapKind),
     /// A configuration value is out of range.
     #[error("invalid LTM configuration: {0}")]
     Config(String),

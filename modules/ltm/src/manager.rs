@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use nalgebra::Point2;
 use tca_ism::ImageFrames;
-use tca_messages::walking::{MapGrid, MapRegion, RangeImage, SensorKind};
+use tca_messages::walking::{MapGrid, MapKind, MapRegion, RangeImage, SensorKind};
 
 use crate::builder::{BuilderConfig, build_map};
 use crate::cell::{Cell, fuse};
@@ -207,6 +207,12 @@ impl TerrainMap {
 
     /// Checks a region request without answering it.
     pub fn check_region(&self, request: &MapRegion) -> Result<Region> {
+        if !matches!(
+            request.kind,
+            MapKind::Elevation | MapKind::ElevationUncertainty | MapKind::Footfall | MapKind::Slope
+        ) {
+            return Err(LtmError::UnsupportedKind(request.kind));
+        }
         Region::new(
             &request.polygon,
             request.resolution_m,

@@ -8,6 +8,10 @@ use tca_messages::walking::PlanePoint;
 use crate::error::{LtmError, Result, check_resolution};
 use crate::patch::lattice_index;
 
+/// Largest lattice index magnitude a region may reach (keeps every index sum far from
+/// overflow).
+const MAX_INDEX: f64 = 1e12;
+
 /// A checked region.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Region {
@@ -45,6 +49,15 @@ impl Region {
                     index,
                     x_m: c.x_m,
                     y_m: c.y_m,
+                });
+            }
+            let limit_m = MAX_INDEX * resolution_m;
+            if c.x_m.abs() > limit_m || c.y_m.abs() > limit_m {
+                return Err(LtmError::CornerTooFar {
+                    x_m: c.x_m,
+                    y_m: c.y_m,
+                    resolution_m,
+                    limit_m,
                 });
             }
             pts.push(Point2::new(c.x_m, c.y_m));
@@ -176,6 +189,10 @@ mod tests {
         assert!(e.contains("coarser"), "{e}");
         let huge = [pp(-1e300, -1e300), pp(1e300, -1e300), pp(0.0, 1e300)];
         assert!(Region::new(&huge, 0.1, 1000).is_err());
+        // Far away but small: refused before any index could overflow.
+        let far = [pp(1e25, 0.0), pp(1e25, 1e6), pp(1e25 + 1e10, 0.0)];
+        let e = Region::new(&far, 1e6, 1000).unwrap_err().to_string();
+        assert!(e.contains("beyond the map's reach"), "{e}");
     }
 
     #[test]

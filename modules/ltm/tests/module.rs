@@ -8,13 +8,12 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
-use common::{BOX, rect, terrain};
+use common::{BOX, params, rect, terrain};
 use tca_central::StartOptions;
 use tca_ism::{IsmConfig, SensorSpec, VirtualScanner};
 use tca_ltm::LtmConfig;
 use tca_messages::walking::{BodyPose, BodyPosition, MapCell, MapKind, MapRegion};
 use tca_module::{Connector, Module};
-use tca_robot::LegParams;
 
 async fn within<T>(what: &str, f: impl Future<Output = T>) -> T {
     tokio::time::timeout(Duration::from_secs(60), f)
@@ -47,7 +46,7 @@ async fn map_region_takes_an_image_when_it_has_none_or_is_asked_to() {
     )
     .await
     .unwrap();
-    let scanner = VirtualScanner::new(SensorSpec::erim(), terrain(&[BOX]), &LegParams::default());
+    let scanner = VirtualScanner::new(SensorSpec::erim(), terrain(&[BOX]), &params());
     let _ism = within(
         "ism",
         tca_ism::connect(&c, IsmConfig::new().with_sensor(scanner)),

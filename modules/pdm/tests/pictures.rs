@@ -192,7 +192,10 @@ fn a_real_map_of_a_box_is_written_as_png() {
         })
         .collect();
     let terrain = Arc::new(HeightField::new(origin, res, nx, ny, heights).unwrap());
-    let scanner = VirtualScanner::new(SensorSpec::erim(), terrain, &LegParams::default());
+    // The scanner pitched 35° down, which puts the box in the Erim's view.
+    let mut params = LegParams::default();
+    params.scanner.pitch_down_rad = 35f64.to_radians();
+    let scanner = VirtualScanner::new(SensorSpec::erim(), terrain, &params);
     let mut map = TerrainMap::new(LtmConfig::default()).unwrap();
     map.add_image(&scanner.cast(&CarriagePose::level(1.0), 0).unwrap())
         .unwrap();
