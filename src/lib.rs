@@ -6,12 +6,14 @@
 //! - [`builtin`]: modules built into the command (`tca module NAME`): the echo used by
 //!   `tca ping`.
 //! - [`launch`]: launch files for `tca up`.
+//! - [`map`]: `tca map`: map pictures from a running system or a traffic log.
 //! - [`ping`]: timing query round trips through central.
 //! - [`timeline`]: the per-module timeline of Figure 18, as text and PNG.
 //! - [`walk`]: `tca walk`: the walking system assembled, walked, and reported.
 
 pub mod builtin;
 pub mod launch;
+pub mod map;
 pub mod ping;
 pub mod timeline;
 pub mod walk;

@@ -2,6 +2,7 @@
 
 mod central;
 mod log;
+mod map;
 mod module;
 mod ping;
 mod registry;
@@ -41,6 +42,9 @@ enum Command {
     /// Read traffic logs.
     #[command(subcommand)]
     Log(log::LogCommand),
+    /// Draw a terrain map (elevation, uncertainty, footfall, slope) to PNG, from a running
+    /// system or a traffic log.
+    Map(map::MapArgs),
 }
 
 /// Where to find central (shared by the commands that connect).
@@ -95,6 +99,7 @@ pub(crate) fn main() -> ExitCode {
             Command::Registry(args) => registry::run(args).await,
             Command::Tree(args) => tree::run(args).await,
             Command::Log(cmd) => log::run(cmd).await,
+            Command::Map(args) => map::run(args).await,
         }
     });
     match result {

@@ -205,6 +205,20 @@ impl TerrainMap {
             .cell(lattice_index(p.x, r), lattice_index(p.y, r))
     }
 
+    /// The world rectangle `(min, max)` through the centres of the outermost cells the map
+    /// knows anything about (known or occluded, in memory or paged out); `None` while nothing
+    /// is mapped. A region query of this rectangle at the map's resolution returns exactly
+    /// those cells.
+    pub fn mapped_extent(&self) -> Result<Option<(Point2<f64>, Point2<f64>)>> {
+        let r = self.store.resolution_m();
+        Ok(self.store.mapped_cells()?.map(|((i0, j0), (i1, j1))| {
+            (
+                Point2::new(i0 as f64 * r, j0 as f64 * r),
+                Point2::new(i1 as f64 * r, j1 as f64 * r),
+            )
+        }))
+    }
+
     /// Checks a region request without answering it.
     pub fn check_region(&self, request: &MapRegion) -> Result<Region> {
         if !matches!(

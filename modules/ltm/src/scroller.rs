@@ -294,6 +294,41 @@ impl TileStore {
         Ok(self.extract(i, j, 1, 1)?.get(i, j))
     }
 
+    /// The lattice cells the map knows anything about (known or occluded), in memory or on
+    /// disk, as the smallest index rectangle `((i_min, j_min), (i_max, j_max))` holding them
+    /// all; `None` while the map is empty. Reads every tile on disk that is not in memory.
+    pub fn mapped_cells(&self) -> Result<Option<((i64, i64), (i64, i64))>> {
+        let s = self.side as i64;
+        let mut bounds: Option<((i64, i64), (i64, i64))> = None;
+        let mut include = |key: TileKey, cells: &[Cell]| {
+            for (k, cell) in cells.iter().enumerate() {
+                if cell.state == CellState::Unknown {
+                    continue;
+                }
+                let k = k as i64;
+                let (i, j) = (key.tx * s + k % s, key.ty * s + k / s);
+                bounds = Some(match bounds {
+                    None => ((i, j), (i, j)),
+                    Some(((i0, j0), (i1, j1))) => ((i0.min(i), j0.min(j)), (i1.max(i), j1.max(j))),
+                });
+            }
+        };
+        for (key, tile) in &self.resident {
+            include(*key, &tile.cells);
+        }
+        let mut on_disk: Vec<TileKey> = self
+            .on_disk
+            .iter()
+            .copied()
+            .filter(|k| !self.resident.contains_key(k))
+            .collect();
+        on_disk.sort();
+        for key in on_disk {
+            include(key, &self.read_tile(key)?);
+        }
+        Ok(bounds)
+    }
+
     /// Moves the window's centre to the vehicle at `(x, y)`: tiles leaving the window are
     /// written to disk (if changed) and dropped; tiles on disk inside it are read back.
     pub fn set_center(&mut self, x_m: f64, y_m: f64) -> Result<ScrollReport> {
@@ -449,6 +484,24 @@ mod tests {
                 .to_string()
                 .contains("not valid")
         );
+    }
+
+    #[test]
+    fn mapped_cells_span_memory_and_disk() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut store = TileStore::open(dir.path(), 0.1, 16, 20.0).unwrap();
+        assert_eq!(store.mapped_cells().unwrap(), None);
+        store.set_center(0.0, 0.0).unwrap();
+        let near = patch_with(-3, 2, 5, |_, _| Cell::known(0.0, 0.01));
+        store.update_with(&near, |_, n| n).unwrap();
+        assert_eq!(store.mapped_cells().unwrap(), Some(((-3, 2), (1, 6))));
+        // Far away, then scrolled out to disk: still counted.
+        store.set_center(0.0, 100.0).unwrap();
+        let far = patch_with(10, 990, 3, |_, _| Cell::occluded(1.0));
+        store.update_with(&far, |_, n| n).unwrap();
+        store.set_center(0.0, 200.0).unwrap();
+        assert_eq!(store.resident_tiles(), 0);
+        assert_eq!(store.mapped_cells().unwrap(), Some(((-3, 2), (12, 992))));
     }
 
     #[test]
