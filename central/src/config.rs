@@ -1,10 +1,38 @@
 //! Central's configuration.
 
+use std::sync::Arc;
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
+use crate::policy::Policy;
+
 /// Limits and defaults of central. Every field has a sensible default.
+///
+/// # Resource limits
+///
+/// Two layers keep one module from hurting the others:
+///
+/// - **Inbox** (`max_inbox_frames`, `max_inbox_bytes`): frames a link has sent that central has
+///   not handled yet. Central serves links' inboxes in turn (round robin), so a flooding module
+///   only delays itself; a frame arriving at a full inbox is refused with
+///   [`RouteError::OverLimit`](tca_messages::RouteError::OverLimit): at once as the send's
+///   error in-process, as an error envelope over zenoh. One frame is always accepted into an
+///   empty inbox, whatever its size (up to `max_frame_bytes`).
+/// - **Queued in central** (`max_queued_messages`, `max_queued_bytes`): messages a module sent
+///   that central holds (goals and commands waiting for constraints or for their handler's
+///   capacity, messages held for a handler that is down), counted against the *sender*. A send
+///   past either limit is refused with `OverLimit`; the module may send again once central has
+///   delivered some.
+///
+/// # Authentication and authorisation
+///
+/// `policy` (loaded from a TOML file with [`Policy::load`], `tca central --policy FILE`)
+/// makes central check every hello against the policy's identities (identity + secret,
+/// secrets stored as salted SHA3-256 hashes) and every registration and send against the
+/// identity's `register` and `send` globs; its `[transport] zenoh_users_file` also makes the
+/// zenoh router require zenoh user/password authentication. See [`crate::policy`] for the
+/// file format. Without a policy, central admits every module, as before.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct CentralConfig {
@@ -17,6 +45,19 @@ pub struct CentralConfig {
     pub max_wait: Duration,
     /// Goals/commands a module handles at once when its hello says 0.
     pub default_capacity: u32,
+    /// Most frames of one link waiting to be handled by central (its inbox).
+    pub max_inbox_frames: u32,
+    /// Most bytes of one link's frames waiting to be handled by central (its inbox).
+    pub max_inbox_bytes: u64,
+    /// Most messages of one sending module that central may hold at once (not yet delivered:
+    /// goals/commands waiting for their constraints or their handler, messages held for a
+    /// handler that is down).
+    pub max_queued_messages: u32,
+    /// Most data bytes of those held messages, per sending module.
+    pub max_queued_bytes: u64,
+    /// Who may connect, register and send (None: everyone may do everything).
+    #[serde(skip)]
+    pub policy: Option<Arc<Policy>>,
 }
 
 impl Default for CentralConfig {
@@ -26,6 +67,11 @@ impl Default for CentralConfig {
             max_waiting: 1024,
             max_wait: Duration::from_secs(60),
             default_capacity: 1,
+            max_inbox_frames: 1024,
+            max_inbox_bytes: 32 << 20,
+            max_queued_messages: 4096,
+            max_queued_bytes: 64 << 20,
+            policy: None,
         }
     }
 }

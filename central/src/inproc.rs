@@ -1,10 +1,15 @@
 //! The in-process transport: a module in the same process as central talks to it over tokio
 //! channels. Frames are still encoded, so the in-process path exercises the same codec as zenoh.
+//! A frame sent while the link's inbox in central is full is refused at once
+//! ([`CentralError::Refused`](crate::CentralError::Refused) with an over-limit error).
+
+use std::sync::Arc;
 
 use bytes::Bytes;
 use tokio::sync::mpsc;
 
 use crate::core::{Event, LinkId};
+use crate::inbox::Inbox;
 use crate::runtime::Input;
 
 /// A module's end of an in-process link. Dropping it closes the link, as a crash would.
@@ -12,6 +17,7 @@ use crate::runtime::Input;
 pub struct InProcLink {
     link: LinkId,
     to_central: mpsc::UnboundedSender<Input>,
+    inbox: Arc<Inbox>,
     from_central: Option<mpsc::UnboundedReceiver<Bytes>>,
 }
 
@@ -19,11 +25,13 @@ impl InProcLink {
     pub(crate) fn new(
         link: LinkId,
         to_central: mpsc::UnboundedSender<Input>,
+        inbox: Arc<Inbox>,
         from_central: mpsc::UnboundedReceiver<Bytes>,
     ) -> Self {
         InProcLink {
             link,
             to_central,
+            inbox,
             from_central: Some(from_central),
         }
     }
@@ -37,7 +45,7 @@ impl InProcLink {
     pub fn sender(&self) -> InProcSender {
         InProcSender {
             link: self.link,
-            to_central: self.to_central.clone(),
+            inbox: self.inbox.clone(),
         }
     }
 
@@ -57,14 +65,20 @@ impl Drop for InProcLink {
 #[derive(Clone, Debug)]
 pub struct InProcSender {
     link: LinkId,
-    to_central: mpsc::UnboundedSender<Input>,
+    inbox: Arc<Inbox>,
 }
 
 impl InProcSender {
-    /// Sends a frame; fails only when central has stopped.
+    /// Sends a frame. Fails when central has stopped, or when the link already has
+    /// `max_inbox_frames` frames (or `max_inbox_bytes` bytes) waiting in central:
+    /// [`CentralError::Refused`](crate::CentralError::Refused) with
+    /// [`RouteError::OverLimit`](tca_messages::RouteError::OverLimit); the frame is not sent.
     pub fn send(&self, frame: Bytes) -> Result<(), crate::CentralError> {
-        self.to_central
-            .send(Input::Event(Event::Frame(self.link, frame)))
-            .map_err(|_| crate::CentralError::Stopped)
+        self.inbox.push(frame)
+    }
+
+    /// The link number.
+    pub fn link(&self) -> LinkId {
+        self.link
     }
 }

@@ -7,22 +7,29 @@
 //! # Layout
 //!
 //! - [`core`]: the sans-I/O state machine, `handle(event) -> actions`; all of central's logic.
-//! - [`config`]: limits and defaults ([`CentralConfig`]).
+//! - [`config`]: limits and defaults ([`CentralConfig`]), including per-module resource limits.
+//! - [`policy`]: the registration policy file: identities, secrets, who may register and send
+//!   what ([`Policy`]).
 //! - [`runtime`]: the async driver that owns the core, feeds it events from every link and
 //!   carries out its actions; [`CentralHandle`] to connect in-process modules and inspect it.
+//! - `inbox`: each link's bounded inbox of frames not yet handled, served round robin so a
+//!   flooding module delays only itself.
 //! - [`inproc`]: the in-process transport (tokio channels), the embedded default.
 //! - [`zenoh_transport`]: the zenoh transport: central as a zenoh router, modules as clients;
 //!   key-expression conventions shared with the module library.
 
 pub mod config;
 pub mod core;
+mod inbox;
 pub mod inproc;
+pub mod policy;
 pub mod runtime;
 pub mod zenoh_transport;
 
 pub use config::CentralConfig;
 pub use core::{Action, Central, Event, LinkId};
 pub use inproc::InProcLink;
+pub use policy::{Policy, PolicyError};
 pub use runtime::{CentralHandle, RunningCentral, StartOptions, Stats, start};
 
 /// Errors of central's runtime.
@@ -37,6 +44,12 @@ pub enum CentralError {
     /// Central has stopped.
     #[error("central has stopped")]
     Stopped,
+    /// Central refused a frame (an over-limit inbox).
+    #[error(transparent)]
+    Refused(tca_messages::RouteError),
+    /// The policy file could not be loaded.
+    #[error(transparent)]
+    Policy(#[from] PolicyError),
 }
 
 /// Result alias of this crate.

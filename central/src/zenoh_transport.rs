@@ -13,16 +13,25 @@
 //! Publications are reliable with blocking congestion control (no frame is silently dropped)
 //! and express (sent at once, not batched), and multicast scouting is off: modules find central
 //! by its endpoint only.
+//!
+//! Frames from a module go to its link's bounded inbox; one arriving at a full inbox is answered
+//! with an over-limit error instead of being routed.
+//!
+//! With a zenoh users file ([`router_config_with_users`], from the policy's
+//! `[transport] zenoh_users_file`) the router requires zenoh user/password authentication
+//! (`transport/auth/usrpwd`): a client without a valid login cannot open a session at all.
+//! Modules log in with a [`ZenohLogin`] ([`client_config_with_login`]).
 
 use std::collections::HashMap;
+use std::path::Path;
 use std::sync::{Arc, Mutex};
 
 use bytes::Bytes;
-use tokio::sync::mpsc;
 use zenoh::qos::CongestionControl;
 use zenoh::sample::SampleKind;
 
 use crate::core::{Event, LinkId};
+use crate::inbox::Inbox;
 use crate::runtime::{CentralHandle, Input};
 use crate::{CentralError, Result};
 
@@ -69,10 +78,111 @@ fn base_config(mode: &str) -> Result<zenoh::Config> {
 
 /// zenoh configuration of central: a router listening on `listen`.
 pub fn router_config(listen: &[String]) -> Result<zenoh::Config> {
+    router_config_with_users(listen, None)
+}
+
+/// zenoh configuration of central: a router listening on `listen`. With `users_file` (a zenoh
+/// user/password dictionary, `user:password` per line) the router refuses every client that
+/// does not log in with one of its pairs (zenoh's `transport/auth/usrpwd`).
+pub fn router_config_with_users(
+    listen: &[String],
+    users_file: Option<&Path>,
+) -> Result<zenoh::Config> {
     let mut config = base_config("router")?;
     config
         .insert_json5("listen/endpoints", &endpoints_json(listen)?)
         .map_err(|e| CentralError::Zenoh(format!("listen endpoints: {e}")))?;
+    if let Some(file) = users_file {
+        check_users_file(file)?;
+        let path = serde_json::to_string(&file.to_string_lossy())
+            .map_err(|e| CentralError::Zenoh(e.to_string()))?;
+        config
+            .insert_json5("transport/auth/usrpwd/dictionary_file", &path)
+            .map_err(|e| CentralError::Zenoh(format!("zenoh users file: {e}")))?;
+    }
+    Ok(config)
+}
+
+/// Checks a zenoh user/password dictionary before zenoh reads it, for a clearer error.
+fn check_users_file(file: &Path) -> Result<()> {
+    let text = std::fs::read_to_string(file).map_err(|e| {
+        CentralError::Zenoh(format!(
+            "cannot read the zenoh users file {}: {e}",
+            file.display()
+        ))
+    })?;
+    let mut users = 0;
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        match line.split_once(':') {
+            Some((u, p)) if !u.trim().is_empty() && !p.trim().is_empty() => users += 1,
+            _ => {
+                return Err(CentralError::Zenoh(format!(
+                    "zenoh users file {} line {}: write one user:password per line",
+                    file.display(),
+                    i + 1
+                )));
+            }
+        }
+    }
+    if users == 0 {
+        return Err(CentralError::Zenoh(format!(
+            "zenoh users file {} has no user:password line; add one per module login",
+            file.display()
+        )));
+    }
+    Ok(())
+}
+
+/// A zenoh login (user/password authentication of the zenoh transport).
+#[derive(Clone, PartialEq, Eq)]
+pub struct ZenohLogin {
+    /// The zenoh user.
+    pub user: String,
+    /// Its password.
+    pub password: String,
+}
+
+impl std::fmt::Debug for ZenohLogin {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "ZenohLogin {{ user: {:?}, password: *** }}", self.user)
+    }
+}
+
+impl ZenohLogin {
+    /// The login named by the environment variables `TCA_ZENOH_USER` and
+    /// `TCA_ZENOH_PASSWORD`, when both are set.
+    pub fn from_env() -> Option<Self> {
+        let user = std::env::var("TCA_ZENOH_USER").ok()?;
+        let password = std::env::var("TCA_ZENOH_PASSWORD").ok()?;
+        Some(ZenohLogin { user, password })
+    }
+}
+
+/// zenoh configuration of a module: a client connecting to `connect`, logging in with `login`
+/// when central requires it.
+pub fn client_config_with_login(
+    connect: &[String],
+    login: Option<&ZenohLogin>,
+) -> Result<zenoh::Config> {
+    let mut config = client_config(connect)?;
+    if let Some(login) = login {
+        let set = |c: &mut zenoh::Config, key: &str, value: &str| -> Result<()> {
+            let json =
+                serde_json::to_string(value).map_err(|e| CentralError::Zenoh(e.to_string()))?;
+            c.insert_json5(key, &json)
+                .map_err(|e| CentralError::Zenoh(format!("{key}: {e}")))
+        };
+        set(&mut config, "transport/auth/usrpwd/user", &login.user)?;
+        set(
+            &mut config,
+            "transport/auth/usrpwd/password",
+            &login.password,
+        )?;
+    }
     Ok(config)
 }
 
@@ -91,7 +201,7 @@ pub fn client_config(connect: &[String]) -> Result<zenoh::Config> {
 
 /// Links known to the zenoh side, by session id.
 struct LinkTable {
-    by_zid: HashMap<String, LinkId>,
+    by_zid: HashMap<String, (LinkId, Arc<Inbox>)>,
 }
 
 /// Central's zenoh router and the subscriptions that feed the driver.
@@ -103,8 +213,12 @@ pub(crate) struct ZenohCentral {
 }
 
 impl ZenohCentral {
-    pub(crate) async fn start(listen: &[String], handle: CentralHandle) -> Result<Self> {
-        let session = zenoh::open(router_config(listen)?)
+    pub(crate) async fn start(
+        listen: &[String],
+        users_file: Option<&Path>,
+        handle: CentralHandle,
+    ) -> Result<Self> {
+        let session = zenoh::open(router_config_with_users(listen, users_file)?)
             .await
             .map_err(|e| CentralError::Zenoh(format!("cannot listen on {listen:?}: {e}")))?;
         let table = Arc::new(Mutex::new(LinkTable {
@@ -117,16 +231,13 @@ impl ZenohCentral {
             let handle = handle.clone();
             let session = session.clone();
             let runtime = runtime.clone();
-            move |zid: &str| -> LinkId {
+            move |zid: &str| -> Option<Arc<Inbox>> {
                 let mut t = table.lock().unwrap_or_else(|p| p.into_inner());
-                if let Some(&link) = t.by_zid.get(zid) {
-                    return link;
+                if let Some((_, inbox)) = t.by_zid.get(zid) {
+                    return Some(inbox.clone());
                 }
-                let link = handle.allocate_link();
-                t.by_zid.insert(zid.to_owned(), link);
-                let (sink, mut rx) = mpsc::unbounded_channel::<Bytes>();
-                let _ = handle.input().send(Input::Attach(link, sink));
-                let _ = handle.input().send(Input::Event(Event::Opened(link)));
+                let (link, inbox, mut rx) = handle.attach().ok()?;
+                t.by_zid.insert(zid.to_owned(), (link, inbox.clone()));
                 let key = down_key(zid);
                 let session = session.clone();
                 runtime.spawn(async move {
@@ -148,22 +259,23 @@ impl ZenohCentral {
                         }
                     }
                 });
-                link
+                Some(inbox)
             }
         };
 
         let frames = {
             let open = open.clone();
-            let handle = handle.clone();
             session
                 .declare_subscriber("tca/up/*")
                 .callback(move |sample| {
                     let Some(zid) = sample.key_expr().as_str().rsplit('/').next() else {
                         return;
                     };
-                    let link = open(zid);
+                    let Some(inbox) = open(zid) else {
+                        return;
+                    };
                     let frame = Bytes::from(sample.payload().to_bytes().into_owned());
-                    let _ = handle.input().send(Input::Event(Event::Frame(link, frame)));
+                    inbox.push_or_refuse(frame);
                 })
                 .await
                 .map_err(|e| CentralError::Zenoh(e.to_string()))?
@@ -190,7 +302,7 @@ impl ZenohCentral {
                                 .unwrap_or_else(|p| p.into_inner())
                                 .by_zid
                                 .remove(zid);
-                            if let Some(link) = link {
+                            if let Some((link, _)) = link {
                                 let _ = handle.input().send(Input::Event(Event::Closed(link)));
                             }
                         }

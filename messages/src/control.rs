@@ -16,6 +16,9 @@ pub const CONTROL_PREFIX: &str = "tca.";
 pub mod names {
     /// Module -> central: first frame on a link.
     pub const HELLO: &str = "tca.hello";
+    /// Module -> central: first frame on a link, with credentials ([`super::AuthHello`]);
+    /// central answers it like [`HELLO`] (welcome or refusal).
+    pub const HELLO_AUTH: &str = "tca.helloAuth";
     /// Central -> module: the link is accepted ([`super::Welcome`]).
     pub const WELCOME: &str = "tca.welcome";
     /// Module -> central: register handlers ([`super::Register`]); answered with
@@ -60,6 +63,36 @@ pub struct Hello {
     pub pid: u32,
     /// The module's host name, for diagnostics.
     pub host: String,
+}
+
+/// Who a module says it is, checked by central against its policy file. The secret travels in
+/// the hello frame (central never logs it): use it on a trusted network or inside zenoh's
+/// authenticated transport.
+#[derive(Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Credentials {
+    /// The identity named in central's policy file.
+    pub identity: String,
+    /// Its secret.
+    pub secret: String,
+}
+
+impl std::fmt::Debug for Credentials {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "Credentials {{ identity: {:?}, secret: *** }}",
+            self.identity
+        )
+    }
+}
+
+/// A hello with credentials ([`names::HELLO_AUTH`]).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct AuthHello {
+    /// The ordinary hello.
+    pub hello: Hello,
+    /// Who the module says it is.
+    pub credentials: Credentials,
 }
 
 /// Central's acceptance of a link.

@@ -83,4 +83,38 @@ pub enum RouteError {
         /// What was wrong.
         reason: String,
     },
+    /// The module's identity is not allowed to send or register this message by central's
+    /// registration policy. Nothing of it was routed.
+    #[error(
+        "module {module} (identity {identity}) may not {action} {name:?}: {rule}; ask the operator to extend the policy file if it should"
+    )]
+    NotPermitted {
+        /// The module.
+        module: String,
+        /// The identity it authenticated as.
+        identity: String,
+        /// What it tried: "send" or "register".
+        action: String,
+        /// The message name.
+        name: String,
+        /// The policy rule that decided, e.g. `identity "gait": send = ["ltm*", "legMove"]`.
+        rule: String,
+    },
+    /// The sending module is over one of its resource limits in central; the message was
+    /// refused (not routed). Slow down, or raise the limit in central's configuration.
+    #[error(
+        "module {module} is over its limit of {limit} {what} (has {used}); the message was refused: send more slowly, wait for answers, or raise {setting} in central's configuration"
+    )]
+    OverLimit {
+        /// The module.
+        module: String,
+        /// What is limited, e.g. "queued messages in central".
+        what: String,
+        /// How much it uses.
+        used: u64,
+        /// The limit.
+        limit: u64,
+        /// The configuration key that sets the limit.
+        setting: String,
+    },
 }

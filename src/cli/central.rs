@@ -26,14 +26,42 @@ pub(crate) struct CentralArgs {
     /// Largest frame accepted, in bytes.
     #[arg(long, default_value_t = CentralConfig::default().max_frame_bytes)]
     max_frame_bytes: usize,
+    /// Registration policy (TOML): identities and secrets modules must present, what each may
+    /// register and send, and optionally a zenoh users file (see policy.example.toml).
+    #[arg(long, value_name = "FILE")]
+    policy: Option<PathBuf>,
+    /// Most frames of one module waiting to be handled by central; more are refused.
+    #[arg(long, default_value_t = CentralConfig::default().max_inbox_frames)]
+    max_inbox_frames: u32,
+    /// Most bytes of one module's frames waiting to be handled by central.
+    #[arg(long, default_value_t = CentralConfig::default().max_inbox_bytes)]
+    max_inbox_bytes: u64,
+    /// Most messages of one sender held in central (goals waiting for their handler, messages
+    /// for a module that is down); more are refused.
+    #[arg(long, default_value_t = CentralConfig::default().max_queued_messages)]
+    max_queued_messages: u32,
+    /// Most data bytes of one sender's messages held in central.
+    #[arg(long, default_value_t = CentralConfig::default().max_queued_bytes)]
+    max_queued_bytes: u64,
 }
 
 pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
+    let policy = match &args.policy {
+        Some(path) => Some(std::sync::Arc::new(
+            tca_central::Policy::load(path).context("cannot load the policy")?,
+        )),
+        None => None,
+    };
     let options = StartOptions {
         config: CentralConfig {
             max_waiting: args.max_waiting,
             max_wait: Duration::from_millis(args.max_wait_ms),
             max_frame_bytes: args.max_frame_bytes,
+            max_inbox_frames: args.max_inbox_frames,
+            max_inbox_bytes: args.max_inbox_bytes,
+            max_queued_messages: args.max_queued_messages,
+            max_queued_bytes: args.max_queued_bytes,
+            policy,
             ..CentralConfig::default()
         },
         log: args.log.clone(),

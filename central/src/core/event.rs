@@ -18,6 +18,20 @@ pub enum Event {
     Closed(LinkId),
     /// Time passed: check deadlines (waiting messages that are too old).
     Tick,
+    /// A frame the link sent while its inbox in central was full: it is answered with
+    /// an over-limit error and not routed.
+    InboxFull(LinkId, Bytes, InboxUse),
+    /// Frames the link sent while its inbox and its refusal queue were full: dropped unanswered.
+    InboxDropped(LinkId, u64),
+}
+
+/// How full a link's inbox was when a frame was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct InboxUse {
+    /// Frames waiting.
+    pub frames: u64,
+    /// Their bytes.
+    pub bytes: u64,
 }
 
 /// Something central wants done.

@@ -1,6 +1,7 @@
 //! Property test: arbitrary event sequences (garbage frames, well-formed envelopes with random
 //! classes, names, correlations and contexts, links opening and closing, time passing) never
-//! make the core panic, and every frame it sends decodes.
+//! make the core panic, every frame it sends decodes, and the per-sender queue accounting
+//! always equals a recount from scratch (no leak, no double refund).
 
 use std::time::Duration;
 
@@ -110,6 +111,8 @@ proptest! {
         let mut central = Central::new(CentralConfig {
             max_waiting: 4,
             max_wait: Duration::from_millis(500),
+            max_queued_messages: 3,
+            max_queued_bytes: 24,
             ..CentralConfig::default()
         });
         let mut now = 1_000_000_000u64;
@@ -164,6 +167,7 @@ proptest! {
                     prop_assert!(decode(&frame, usize::MAX).is_ok());
                 }
             }
+            prop_assert_eq!(central.recount_queued(), central.queued_totals());
         }
     }
 }

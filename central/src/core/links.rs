@@ -3,7 +3,7 @@
 use std::collections::VecDeque;
 
 use tca_logs::{LinkEvent, LinkRecord, LogRecord, RecordKind};
-use tca_messages::control::{Hello, Welcome, names};
+use tca_messages::control::{AuthHello, Hello, Welcome, names};
 use tca_messages::{
     Class, Envelope, MessageName, ModuleName, RouteError, decode_data, encode_data,
 };
@@ -21,16 +21,25 @@ impl Central {
 
     /// The first frame on a link must be a hello.
     pub(super) fn before_hello(&mut self, link: LinkId, envelope: Envelope, out: &mut Vec<Action>) {
-        if envelope.class != Class::Control || envelope.name.as_str() != names::HELLO {
+        let is_hello = envelope.class == Class::Control
+            && matches!(envelope.name.as_str(), names::HELLO | names::HELLO_AUTH);
+        if !is_hello {
             let reason = format!(
-                "the first frame on a link must be {} (got {} {}); connect with the module library",
+                "the first frame on a link must be {} or {} (got {} {}); connect with the module \
+                 library",
                 names::HELLO,
+                names::HELLO_AUTH,
                 envelope.class,
                 envelope.name
             );
             return self.refuse(link, &envelope, reason, out);
         }
-        let hello: Hello = match decode_data(&envelope.data) {
+        let decoded = if envelope.name.as_str() == names::HELLO_AUTH {
+            decode_data::<AuthHello>(&envelope.data).map(|a| (a.hello, Some(a.credentials)))
+        } else {
+            decode_data::<Hello>(&envelope.data).map(|h| (h, None))
+        };
+        let (hello, credentials) = match decoded {
             Ok(h) => h,
             Err(err) => return self.refuse(link, &envelope, format!("bad hello: {err}"), out),
         };
@@ -55,13 +64,28 @@ impl Central {
             );
             return self.refuse(link, &envelope, reason, out);
         }
+        let grant = match &self.config.policy {
+            Some(policy) => {
+                match policy.authenticate(hello.module.as_str(), credentials.as_ref()) {
+                    Ok(grant) => Some(grant),
+                    Err(reason) => return self.refuse(link, &envelope, reason, out),
+                }
+            }
+            None => None,
+        };
         let capacity = if hello.capacity == 0 {
             self.config.default_capacity.max(1)
         } else {
             hello.capacity
         } as usize;
         let name = hello.module.clone();
-        let detail = format!("pid {} on {}, capacity {capacity}", hello.pid, hello.host);
+        let detail = match &grant {
+            Some(g) => format!(
+                "pid {} on {}, capacity {capacity}, identity {}",
+                hello.pid, hello.host, g.identity
+            ),
+            None => format!("pid {} on {}, capacity {capacity}", hello.pid, hello.host),
+        };
         match self.modules.get_mut(&name) {
             Some(state) => {
                 // A module coming back: keep what waits for it; it is delivered once the module
@@ -71,6 +95,7 @@ impl Central {
                 state.capacity = capacity;
                 state.running = 0;
                 state.down_since = None;
+                state.grant = grant;
             }
             None => {
                 self.modules.insert(
@@ -83,6 +108,7 @@ impl Central {
                         ready: VecDeque::new(),
                         waiting: VecDeque::new(),
                         down_since: None,
+                        grant,
                     },
                 );
             }

@@ -11,12 +11,16 @@
 //! - `routing`: queries, informs, exceptions and the answers to them;
 //! - `tasks`: goals and commands, the task tree, capacity and dispatch;
 //! - `waiting`: messages held for modules that are down, with their bounds;
+//! - `quota`: per-sender accounting of what central holds, and its limits;
+//! - `permissions`: the registration policy applied to what a module sends;
 //! - `tree`: the adapter to `tca-task-tree`.
 
 mod event;
 mod exceptions;
 mod links;
 mod monitors;
+mod permissions;
+mod quota;
 mod registry;
 mod routing;
 mod tasks;
@@ -34,15 +38,17 @@ use rustc_hash::FxHashMap as HashMap;
 
 use bytes::Bytes;
 use tca_logs::{Direction, FrameRecord, LogRecord, ProblemRecord, RecordKind};
-use tca_messages::control::{CENTRAL, Hello};
+use tca_messages::control::{CENTRAL, Hello, names};
 use tca_messages::{
     Class, Envelope, MessageId, MessageName, ModuleName, RouteError, SendOptions, encode,
     encode_data,
 };
 
-pub use event::{Action, Event, LinkId};
+pub use event::{Action, Event, InboxUse, LinkId};
+pub use quota::Usage;
 
 use crate::config::CentralConfig;
+use crate::policy::Grant;
 use registry::Entry;
 use routing::OpenQuery;
 use tasks::Task;
@@ -63,6 +69,8 @@ pub struct Central {
     attachments: exceptions::Attachments,
     exceptions: HashMap<MessageId, exceptions::OpenException>,
     monitors: Vec<monitors::MonitorState>,
+    /// What each sending module has held in central (see `quota`).
+    queued: HashMap<ModuleName, Usage>,
     central_name: ModuleName,
     seq: u32,
     now: u64,
@@ -84,6 +92,10 @@ pub struct Counters {
     pub bad_frames: u64,
     /// Errors sent to senders.
     pub errors_sent: u64,
+    /// Messages refused by the registration policy (sends and registrations).
+    pub not_permitted: u64,
+    /// Messages refused because their sender was over a resource limit.
+    pub over_limit: u64,
 }
 
 /// A transport link.
@@ -105,6 +117,8 @@ struct ModuleState {
     waiting: VecDeque<Waiting>,
     /// When the module went down (None while connected).
     down_since: Option<u64>,
+    /// What the policy lets it do (None: no policy, everything).
+    grant: Option<Grant>,
 }
 
 impl Central {
@@ -123,6 +137,7 @@ impl Central {
             attachments: HashMap::default(),
             exceptions: HashMap::default(),
             monitors: Vec::new(),
+            queued: HashMap::default(),
             central_name: ModuleName::new(CENTRAL).unwrap_or_else(|_| unreachable!()),
             seq: 0,
             now: 0,
@@ -153,6 +168,8 @@ impl Central {
                 self.expire_waiting(out);
                 self.poll_monitors(out);
             }
+            Event::InboxFull(link, frame, used) => self.inbox_full(link, frame, used, out),
+            Event::InboxDropped(link, count) => self.inbox_dropped(link, count, out),
         }
     }
 
@@ -214,6 +231,12 @@ impl Central {
             }
         };
         self.cause_stamp = envelope.timestamp_ns;
+        let frame = if envelope.name.as_str() == names::HELLO_AUTH {
+            // Never write a secret to the log.
+            permissions::redacted_hello(&envelope).unwrap_or_default()
+        } else {
+            frame
+        };
         self.log_frame(Direction::In, link, peer.clone(), &envelope, frame, out);
         let Some(module) = peer else {
             return self.before_hello(link, envelope, out);
@@ -234,6 +257,9 @@ impl Central {
             );
             self.problem(Some(link), Some(module), reason.clone(), &[], out);
             return self.send_error(link, &envelope, RouteError::BadFrame { reason }, out);
+        }
+        if let Err(error) = self.permit(link, &module, &envelope, out) {
+            return self.send_error(link, &envelope, error, out);
         }
         match envelope.class {
             Class::Query | Class::Inform => self.route_by_name(link, module, envelope, out),
@@ -331,6 +357,11 @@ impl Central {
     ) {
         tracing::debug!(link, %error, "error to sender");
         self.counters.errors_sent += 1;
+        match error {
+            RouteError::NotPermitted { .. } => self.counters.not_permitted += 1,
+            RouteError::OverLimit { .. } => self.counters.over_limit += 1,
+            _ => {}
+        }
         let data = encode_data(&error).unwrap_or_default();
         let (correlation, name) = match about {
             Some((id, name)) => (Some(id), name),

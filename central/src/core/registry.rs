@@ -54,6 +54,10 @@ impl Central {
         out: &mut Vec<Action>,
     ) -> Result<(), String> {
         let name = &reg.name;
+        if let Err(reason) = self.permit_registration(module, name.as_str()) {
+            self.counters.not_permitted += 1;
+            return Err(reason);
+        }
         if name.is_control() {
             return Err(format!(
                 "{name}: names starting with \"tca.\" are reserved for central"

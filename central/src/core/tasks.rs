@@ -32,6 +32,8 @@ pub(super) struct Task {
     pub(super) root: bool,
     /// Why it was killed, when that is a failure (an unhandled exception).
     pub(super) failure: Option<String>,
+    /// It counts against its sender's queue limits (until first dispatched).
+    pub(super) charged: bool,
 }
 
 impl Central {
@@ -47,6 +49,9 @@ impl Central {
             Err(err) => return self.send_error(link, &envelope, err, out),
         };
         if let Err(err) = self.check_room(&handler) {
+            return self.send_error(link, &envelope, err, out);
+        }
+        if let Err(err) = self.check_quota(&sender, envelope.data.len()) {
             return self.send_error(link, &envelope, err, out);
         }
         if self.tasks.contains_key(&envelope.id) {
@@ -89,6 +94,7 @@ impl Central {
             }
         };
         let id = envelope.id;
+        self.charge(&sender, envelope.data.len());
         self.tasks.insert(
             id,
             Box::new(Task {
@@ -101,6 +107,7 @@ impl Central {
                 ready_since: self.now,
                 root: parent.is_none(),
                 failure: None,
+                charged: true,
             }),
         );
         self.node_task.insert(node, id);
@@ -283,6 +290,10 @@ impl Central {
                 continue;
             };
             task.running = true;
+            if task.charged {
+                task.charged = false;
+                self.refund(&task.sender, task.envelope.data.len());
+            }
             task.envelope.node = Some(NodeId(node));
             task.envelope.timestamp_ns = task.envelope.timestamp_ns.max(self.cause_stamp);
             self.send(link, &task.envelope, out);
@@ -374,8 +385,11 @@ impl Central {
                     self.task_ended(node, TaskOutcome::Killed, out);
                 }
                 TreeEvent::Retired(node) => {
-                    if let Some(id) = self.node_task.remove(&node) {
-                        self.tasks.remove(&id);
+                    if let Some(id) = self.node_task.remove(&node)
+                        && let Some(task) = self.tasks.remove(&id)
+                        && task.charged
+                    {
+                        self.refund(&task.sender, task.envelope.data.len());
                     }
                     self.forget_node(node);
                     self.monitors_node_ended(node);

@@ -12,6 +12,8 @@ pub(super) struct Waiting {
     pub(super) envelope: Envelope,
     /// Since when it has waited for a module that is down.
     pub(super) since_ns: u64,
+    /// It counts against its sender's queue limits.
+    pub(super) charged: bool,
 }
 
 impl Waiting {
@@ -19,6 +21,7 @@ impl Waiting {
         Waiting {
             envelope,
             since_ns: now,
+            charged: false,
         }
     }
 }
@@ -46,8 +49,16 @@ impl Central {
     }
 
     /// Holds a message for a module that is down.
-    pub(super) fn hold(&mut self, module: &ModuleName, waiting: Waiting) -> Result<(), RouteError> {
+    pub(super) fn hold(
+        &mut self,
+        module: &ModuleName,
+        mut waiting: Waiting,
+    ) -> Result<(), RouteError> {
         self.check_room(module)?;
+        let (sender, bytes) = (&waiting.envelope.sender, waiting.envelope.data.len());
+        self.check_quota(sender, bytes)?;
+        self.charge(&sender.clone(), bytes);
+        waiting.charged = true;
         let now = self.now;
         let state = self.modules.entry(module.clone()).or_insert_with(|| {
             // A module registered by name in an earlier life of central's state, never seen
@@ -66,6 +77,7 @@ impl Central {
                 ready: Default::default(),
                 waiting: Default::default(),
                 down_since: Some(now),
+                grant: None,
             }
         });
         state.waiting.push_back(waiting);
@@ -88,6 +100,9 @@ impl Central {
                 .get(&w.envelope.name)
                 .is_some_and(|e| &e.handler == module);
             if routed_here {
+                if w.charged {
+                    self.refund(&w.envelope.sender, w.envelope.data.len());
+                }
                 self.send(link, &w.envelope, out);
             } else {
                 keep.push_back(w);
@@ -188,6 +203,9 @@ impl Central {
                 expired_tasks = old;
             }
             for w in expired {
+                if w.charged {
+                    self.refund(&w.envelope.sender, w.envelope.data.len());
+                }
                 let waited = now.saturating_sub(w.since_ns);
                 if w.envelope.class == Class::Query {
                     self.queries.remove(&w.envelope.id);

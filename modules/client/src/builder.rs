@@ -4,7 +4,7 @@ use std::collections::HashMap;
 use std::future::Future;
 use std::time::Duration;
 
-use tca_messages::control::{Hello, Register, RegisterOutcome, Welcome, names};
+use tca_messages::control::{Credentials, Hello, Register, RegisterOutcome, Welcome, names};
 use tca_messages::{
     Class, DEFAULT_MAX_FRAME_BYTES, Envelope, Message, MessageId, MessageName, ModuleName,
     RouteError, SendOptions, decode, decode_data, encode, encode_data, now_ns,
@@ -12,6 +12,7 @@ use tca_messages::{
 
 use crate::connector::Connector;
 use crate::context::Context;
+use crate::credentials::{credentials_from_env, hello_payload};
 use crate::error::{HandlerError, ModuleError, Result};
 use crate::handler::{HandlerEntry, erase};
 use crate::module::{DEFAULT_QUERY_TIMEOUT, Module};
@@ -29,6 +30,7 @@ pub struct ModuleBuilder {
     sim_time: bool,
     handlers: HashMap<MessageName, HandlerEntry>,
     error: Option<ModuleError>,
+    credentials: Option<Credentials>,
 }
 
 impl Module {
@@ -43,6 +45,7 @@ impl Module {
             sim_time: false,
             handlers: HashMap::new(),
             error: None,
+            credentials: None,
         }
     }
 }
@@ -74,6 +77,17 @@ impl ModuleBuilder {
     /// real mechanism's while the simulation runs as fast as it can.
     pub fn simulated_time(mut self, on: bool) -> Self {
         self.sim_time = on;
+        self
+    }
+
+    /// Log in to central as `identity` with `secret` (checked against central's policy file).
+    /// Without it the module uses `TCA_IDENTITY` and `TCA_SECRET` when both are set, else
+    /// connects anonymously.
+    pub fn identity(mut self, identity: impl Into<String>, secret: impl Into<String>) -> Self {
+        self.credentials = Some(Credentials {
+            identity: identity.into(),
+            secret: secret.into(),
+        });
         self
     }
 
@@ -128,12 +142,9 @@ impl ModuleBuilder {
             pid: std::process::id(),
             host: hostname(),
         };
-        let hello_env = bootstrap(
-            &name,
-            names::HELLO,
-            MessageId::new(0, 0),
-            encode_data(&hello)?,
-        )?;
+        let credentials = self.credentials.or_else(credentials_from_env);
+        let (hello_name, hello_data) = hello_payload(hello, credentials)?;
+        let hello_env = bootstrap(&name, hello_name, MessageId::new(0, 0), hello_data)?;
         link.tx.send(encode(&hello_env)?.into())?;
         let answer = next_answer(&mut link.rx, hello_env.id, connector).await?;
         let welcome: Welcome = match answer.class {

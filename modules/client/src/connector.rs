@@ -5,7 +5,9 @@ use std::sync::Arc;
 use bytes::Bytes;
 use tca_central::CentralHandle;
 use tca_central::inproc::InProcSender;
-use tca_central::zenoh_transport::{alive_key, client_config, down_key, up_key};
+use tca_central::zenoh_transport::{
+    ZenohLogin, alive_key, client_config_with_login, down_key, up_key,
+};
 use tokio::sync::mpsc;
 use zenoh::qos::CongestionControl;
 
@@ -16,8 +18,12 @@ use crate::error::{ModuleError, Result};
 pub enum Connector {
     /// Central runs in this process (the embedded default).
     InProcess(CentralHandle),
-    /// Central is reached over zenoh at these endpoints (e.g. `tcp/127.0.0.1:7447`).
+    /// Central is reached over zenoh at these endpoints (e.g. `tcp/127.0.0.1:7447`), logging
+    /// in with `TCA_ZENOH_USER`/`TCA_ZENOH_PASSWORD` when they are set.
     Zenoh(Vec<String>),
+    /// Central is reached over zenoh at these endpoints, logging in with this zenoh
+    /// user/password (central's router requires it when its policy names a zenoh users file).
+    ZenohWithLogin(Vec<String>, ZenohLogin),
 }
 
 impl Connector {
@@ -26,11 +32,28 @@ impl Connector {
         Connector::Zenoh(vec![endpoint.into()])
     }
 
+    /// A zenoh connector for one endpoint that logs in with a zenoh user and password.
+    pub fn zenoh_with_login(
+        endpoint: impl Into<String>,
+        user: impl Into<String>,
+        password: impl Into<String>,
+    ) -> Self {
+        Connector::ZenohWithLogin(
+            vec![endpoint.into()],
+            ZenohLogin {
+                user: user.into(),
+                password: password.into(),
+            },
+        )
+    }
+
     /// Describes where it connects, for messages.
     pub fn describe(&self) -> String {
         match self {
             Connector::InProcess(_) => "in-process central".into(),
-            Connector::Zenoh(e) => format!("central over zenoh at {}", e.join(", ")),
+            Connector::Zenoh(e) | Connector::ZenohWithLogin(e, _) => {
+                format!("central over zenoh at {}", e.join(", "))
+            }
         }
     }
 
@@ -50,7 +73,10 @@ impl Connector {
                     keep: Keep::InProc(Arc::new(link)),
                 })
             }
-            Connector::Zenoh(endpoints) => open_zenoh(endpoints).await,
+            Connector::Zenoh(endpoints) => {
+                open_zenoh(endpoints, ZenohLogin::from_env().as_ref()).await
+            }
+            Connector::ZenohWithLogin(endpoints, login) => open_zenoh(endpoints, Some(login)).await,
         }
     }
 }
@@ -65,7 +91,11 @@ pub(crate) enum FrameTx {
 impl FrameTx {
     pub(crate) fn send(&self, frame: Bytes) -> Result<()> {
         match self {
-            FrameTx::InProc(s) => s.send(frame).map_err(|_| ModuleError::Disconnected),
+            FrameTx::InProc(s) => s.send(frame).map_err(|e| match e {
+                // Over its inbox limit in central: the send is refused, the link stays.
+                tca_central::CentralError::Refused(route) => ModuleError::Route(route),
+                _ => ModuleError::Disconnected,
+            }),
             FrameTx::Zenoh(s) => s.send(frame).map_err(|_| ModuleError::Disconnected),
         }
     }
@@ -93,11 +123,22 @@ pub(crate) struct Link {
     pub(crate) keep: Keep,
 }
 
-async fn open_zenoh(endpoints: &[String]) -> Result<Link> {
-    let config = client_config(endpoints).map_err(|e| ModuleError::Connect(e.to_string()))?;
+async fn open_zenoh(endpoints: &[String], login: Option<&ZenohLogin>) -> Result<Link> {
+    let config = client_config_with_login(endpoints, login)
+        .map_err(|e| ModuleError::Connect(e.to_string()))?;
     let session = zenoh::open(config).await.map_err(|e| {
+        let hint = match login {
+            Some(l) => format!(
+                "; central may have refused zenoh user {:?} (check TCA_ZENOH_USER/TCA_ZENOH_PASSWORD \
+                 against its zenoh users file)",
+                l.user
+            ),
+            None => "; if central requires a zenoh login, set TCA_ZENOH_USER and \
+                     TCA_ZENOH_PASSWORD"
+                .into(),
+        };
         ModuleError::Connect(format!(
-            "no central at {}: {e}; start one with `tca central --listen ENDPOINT`",
+            "no central at {}: {e}; start one with `tca central --listen ENDPOINT`{hint}",
             endpoints.join(", ")
         ))
     })?;

@@ -32,12 +32,15 @@
 //!   registry and tree inspection, kill and constraints; the receive loop that runs handlers.
 //! - [`context`]: [`Context`], what a handler gets: sends attach to the handler's task node.
 //! - [`connector`]: [`Connector`]: in-process or zenoh.
+//! - [`credentials`]: the identity/secret of the hello and the zenoh login, in code or from
+//!   `TCA_IDENTITY`/`TCA_SECRET` and `TCA_ZENOH_USER`/`TCA_ZENOH_PASSWORD`.
 //! - `handler`: type erasure of handlers.
 //! - [`error`]: [`ModuleError`] and [`HandlerError`].
 
 pub mod builder;
 pub mod connector;
 pub mod context;
+pub mod credentials;
 pub mod error;
 mod handler;
 pub mod module;
@@ -45,6 +48,7 @@ pub mod module;
 pub use builder::ModuleBuilder;
 pub use connector::Connector;
 pub use context::Context;
+pub use credentials::ZenohLogin;
 pub use error::{HandlerError, ModuleError, Result};
 pub use module::{DEFAULT_QUERY_TIMEOUT, Module, Task, raise_action, send_action};
 pub use tca_messages::control::MonitorAction;

@@ -265,7 +265,10 @@ impl Module {
         } else {
             None
         };
-        self.transmit(&envelope)?;
+        if let Err(e) = self.transmit(&envelope) {
+            lock(&self.shared.watchers).remove(&id);
+            return Err(e);
+        }
         Ok(Task { id, outcome })
     }
 

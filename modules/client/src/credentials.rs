@@ -1,0 +1,35 @@
+//! Logging in: the identity and secret a module presents in its hello, checked by central
+//! against its policy file, and the zenoh login of the transport.
+//!
+//! Both can be given in code ([`ModuleBuilder::identity`](crate::ModuleBuilder::identity),
+//! [`Connector::zenoh_with_login`](crate::Connector::zenoh_with_login)) or, for built-in
+//! modules and command-line tools, by environment variables: `TCA_IDENTITY` and `TCA_SECRET`
+//! for the hello, `TCA_ZENOH_USER` and `TCA_ZENOH_PASSWORD` for zenoh. Code wins over the
+//! environment.
+
+use tca_messages::control::{AuthHello, Credentials, Hello, names};
+
+use crate::error::Result;
+
+pub use tca_central::zenoh_transport::ZenohLogin;
+
+/// The credentials named by `TCA_IDENTITY` and `TCA_SECRET`, when both are set.
+pub fn credentials_from_env() -> Option<Credentials> {
+    let identity = std::env::var("TCA_IDENTITY").ok()?;
+    let secret = std::env::var("TCA_SECRET").ok()?;
+    Some(Credentials { identity, secret })
+}
+
+/// The hello's control name and data: `tca.helloAuth` with credentials, else `tca.hello`.
+pub(crate) fn hello_payload(
+    hello: Hello,
+    credentials: Option<Credentials>,
+) -> Result<(&'static str, Vec<u8>)> {
+    Ok(match credentials {
+        Some(credentials) => (
+            names::HELLO_AUTH,
+            tca_messages::encode_data(&AuthHello { hello, credentials })?,
+        ),
+        None => (names::HELLO, tca_messages::encode_data(&hello)?),
+    })
+}
