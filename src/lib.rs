@@ -8,6 +8,7 @@
 //! - [`launch`]: launch files for `tca up`.
 //! - [`map`]: `tca map`: map pictures from a running system or a traffic log.
 //! - [`ping`]: timing query round trips through central.
+//! - [`replay`]: `tca log replay`: a recorded walk run again with modules played from its log.
 //! - [`timeline`]: the per-module timeline of Figure 18, as text and PNG.
 //! - [`walk`]: `tca walk`: the walking system assembled, walked, and reported.
 
@@ -15,5 +16,6 @@ pub mod builtin;
 pub mod launch;
 pub mod map;
 pub mod ping;
+pub mod replay;
 pub mod timeline;
 pub mod walk;

@@ -15,17 +15,22 @@
 //! - [`show`]: rendering a log as readable lines with filters.
 //! - [`stats`]: the Figure 18 breakdown (computing, waiting, idle per module), latencies.
 //! - [`export`]: a JSON-encoded copy of a log for Foxglove Studio.
+//! - [`script`]: what one module did in a recorded run, as a script to play it back.
+//! - [`compare`]: comparing what modules sent in two runs, field by field (`tca log replay`).
 //! - [`error`][]: [`LogError`].
 
+pub mod compare;
 pub mod error;
 pub mod export;
 pub mod layout;
 pub mod reader;
 pub mod record;
+pub mod script;
 pub mod show;
 pub mod stats;
 pub mod writer;
 
+pub use compare::{Comparison, Difference, Divergence, Rules, Side, compare};
 pub use error::{LogError, Result};
 pub use export::export_json;
 pub use reader::{KnownFormat, LogFile};
@@ -33,6 +38,7 @@ pub use record::{
     Direction, FrameRecord, LinkEvent, LinkRecord, LogRecord, ProblemRecord, RecordKind,
     RegisteredRecord, TreeRecord,
 };
+pub use script::{ModuleScript, RootTask, connection_order, module_script, root_tasks};
 pub use show::{ShowFilter, render, tree_at};
 pub use stats::{LogStats, ModuleStats, QueryStats, Span, TimeBase, stats};
 pub use writer::{FLUSH_INTERVAL, LogSink, LogWriter};

@@ -17,6 +17,8 @@ pub(crate) enum LogCommand {
     /// Print the Figure 18 breakdown (per module: computing, waiting, idle), message counts
     /// and query latencies.
     Stats(StatsArgs),
+    /// Replay a recorded walk with some modules played from the log; report the first divergence.
+    Replay(super::replay::ReplayArgs),
 }
 
 #[derive(Debug, Args)]
@@ -74,6 +76,7 @@ pub(crate) struct ShowArgs {
 
 pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
     match cmd {
+        LogCommand::Replay(args) => super::replay::run(args).await,
         LogCommand::Export(args) => {
             let log = LogFile::open(&args.file)
                 .with_context(|| format!("cannot read log {}", args.file.display()))?;

@@ -6,6 +6,7 @@ mod map;
 mod module;
 mod ping;
 mod registry;
+mod replay;
 mod tree;
 mod up;
 mod walk;

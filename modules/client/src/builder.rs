@@ -127,6 +127,41 @@ impl ModuleBuilder {
         self
     }
 
+    /// Registers a handler of encoded data: the registration (name, class, data and reply
+    /// formats) is given at run time instead of by a Rust type, and the handler gets the
+    /// postcard data and returns the postcard reply (queries; ignored for the other classes).
+    /// For tools that stand in for a module they were not compiled with, such as
+    /// `tca log replay`, which plays a module back from a traffic log. `registration.replace`
+    /// follows [`ModuleBuilder::replace`].
+    pub fn handle_raw<F, Fut>(
+        mut self,
+        mut registration: tca_messages::control::Registration,
+        handler: F,
+    ) -> Self
+    where
+        F: Fn(Context, Vec<u8>) -> Fut + Send + Sync + 'static,
+        Fut: Future<Output = Result<Vec<u8>, HandlerError>> + Send + 'static,
+    {
+        registration.replace = self.replace;
+        match crate::handler::erase_raw(registration, handler) {
+            Ok(entry) => {
+                let name = entry.registration.name.clone();
+                if self.handlers.insert(name.clone(), entry).is_some() && self.error.is_none() {
+                    self.error = Some(ModuleError::Usage(format!(
+                        "two handlers for {name} in module {}",
+                        self.name
+                    )));
+                }
+            }
+            Err(e) => {
+                if self.error.is_none() {
+                    self.error = Some(e);
+                }
+            }
+        }
+        self
+    }
+
     /// Connects to central, says hello, registers every handler and starts serving.
     pub async fn connect(self, connector: &Connector) -> Result<Module> {
         if let Some(e) = self.error {

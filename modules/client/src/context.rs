@@ -3,7 +3,7 @@
 
 use std::ops::Deref;
 
-use tca_messages::NodeId;
+use tca_messages::{Class, MessageId, ModuleName, NodeId};
 
 use crate::module::Module;
 
@@ -14,15 +14,46 @@ pub struct Context {
     module: Module,
     redelivery: u32,
     origin: Option<NodeId>,
+    message: Incoming,
+}
+
+/// What identifies the message being handled.
+#[derive(Clone, Debug)]
+pub(crate) struct Incoming {
+    pub(crate) sender: ModuleName,
+    pub(crate) id: MessageId,
+    pub(crate) class: Class,
 }
 
 impl Context {
-    pub(crate) fn new(module: Module, redelivery: u32, origin: Option<NodeId>) -> Self {
+    pub(crate) fn new(
+        module: Module,
+        redelivery: u32,
+        origin: Option<NodeId>,
+        message: Incoming,
+    ) -> Self {
         Context {
             module,
             redelivery,
             origin,
+            message,
         }
+    }
+
+    /// The module that sent the message being handled (for an exception, the module that
+    /// raised it; `central` for what central originates, such as monitor actions).
+    pub fn sender(&self) -> &ModuleName {
+        &self.message.sender
+    }
+
+    /// The id of the message being handled.
+    pub fn message_id(&self) -> MessageId {
+        self.message.id
+    }
+
+    /// The class of the message being handled.
+    pub fn class(&self) -> Class {
+        self.message.class
     }
 
     /// The sender's task node when the message was sent; for an exception, the node that

@@ -23,6 +23,32 @@ pub(crate) struct HandlerEntry {
     pub(crate) call: ErasedHandler,
 }
 
+/// Wraps a handler of encoded data, registered with a format given at run time.
+pub(crate) fn erase_raw<F, Fut>(registration: Registration, f: F) -> Result<HandlerEntry>
+where
+    F: Fn(Context, Vec<u8>) -> Fut + Send + Sync + 'static,
+    Fut: Future<Output = Result<Vec<u8>, HandlerError>> + Send + 'static,
+{
+    if !registration.class.is_handled() {
+        return Err(ModuleError::Usage(format!(
+            "{} is registered as a {}; only queries, goals, commands, informs and exceptions have handlers",
+            registration.name, registration.class
+        )));
+    }
+    if registration.class == tca_messages::Class::Query && registration.reply.is_none() {
+        return Err(ModuleError::Usage(format!(
+            "query {} needs a reply format; give Registration::reply",
+            registration.name
+        )));
+    }
+    let f = Arc::new(f);
+    let call: ErasedHandler = Arc::new(move |ctx: Context, data: Vec<u8>| {
+        let f = f.clone();
+        Box::pin(async move { f(ctx, data).await }) as HandlerFuture
+    });
+    Ok(HandlerEntry { registration, call })
+}
+
 /// Wraps a typed handler.
 pub(crate) fn erase<M, F, Fut>(f: F, replace: bool) -> Result<(MessageName, HandlerEntry)>
 where

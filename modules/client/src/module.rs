@@ -287,6 +287,84 @@ impl Module {
         self.transmit(&envelope)
     }
 
+    /// Sends a query given by name and postcard data, and waits at most `timeout` (the
+    /// module's query timeout if `None`) for the reply's postcard data. For tools that do not
+    /// know the message's Rust type (`tca log replay`); modules use [`Module::query`].
+    pub async fn query_raw(
+        &self,
+        name: &str,
+        data: Vec<u8>,
+        timeout: Option<Duration>,
+    ) -> Result<Vec<u8>> {
+        let envelope = self.envelope(Class::Query, name, data, None)?;
+        let answer = self
+            .request(envelope, timeout.unwrap_or(self.shared.query_timeout))
+            .await?;
+        match answer.class {
+            Class::Reply => Ok(answer.data),
+            Class::Failure => Err(ModuleError::HandlerFailed {
+                name: name.into(),
+                reason: decode_data::<Failure>(&answer.data)
+                    .map(|f| f.reason)
+                    .unwrap_or_else(|e| e.to_string()),
+            }),
+            _ => Err(route_error(&answer)),
+        }
+    }
+
+    /// Sends a goal, command, inform or exception given by class, name and postcard data, in
+    /// this handle's context (an exception is raised there). `options` (constraints, notify)
+    /// apply to goals and commands only; for informs and exceptions they must be the default.
+    /// The returned [`Task`] names the message sent; its outcome is known only for a goal or
+    /// command sent with `notify`. For tools that do not know the message's Rust type
+    /// (`tca log replay`); modules use [`Module::goal`], [`Module::raise`] and the like.
+    pub fn send_raw(
+        &self,
+        class: Class,
+        name: &str,
+        data: Vec<u8>,
+        options: SendOptions,
+    ) -> Result<Task> {
+        match class {
+            Class::Goal | Class::Command => {}
+            Class::Inform | Class::Exception if options == SendOptions::default() => {}
+            Class::Inform | Class::Exception => {
+                return Err(ModuleError::Usage(format!(
+                    "{name} is a {class}: constraints and notify apply to goals and commands only"
+                )));
+            }
+            other => {
+                return Err(ModuleError::Usage(format!(
+                    "send_raw sends goals, commands, informs and exceptions; {name} is a {other} \
+                     (use query_raw for queries)"
+                )));
+            }
+        }
+        let notify = options.notify && class.is_task();
+        let envelope = self.envelope(class, name, data, Some(options))?;
+        let id = envelope.id;
+        let outcome = if notify {
+            let (tx, rx) = oneshot::channel();
+            lock(&self.shared.watchers).insert(id, tx);
+            Some(rx)
+        } else {
+            None
+        };
+        if let Err(e) = self.transmit(&envelope) {
+            lock(&self.shared.watchers).remove(&id);
+            return Err(e);
+        }
+        Ok(Task { id, outcome })
+    }
+
+    /// [`Module::on_exception`] for an exception given by name (tools that do not know its
+    /// Rust type).
+    pub async fn on_exception_raw(&self, node: NodeId, name: &str) -> Result<()> {
+        let name = MessageName::new(name).map_err(|e| ModuleError::Usage(e.to_string()))?;
+        self.control(names::ON_EXCEPTION, &OnException { node, name })
+            .await
+    }
+
     /// The registry of every registered message.
     pub async fn registry(&self) -> Result<Registry> {
         self.control(names::REGISTRY, &()).await
@@ -602,6 +680,11 @@ impl Module {
             handler_module.clone(),
             envelope.redelivery,
             envelope.context,
+            crate::context::Incoming {
+                sender: envelope.sender.clone(),
+                id: envelope.id,
+                class: envelope.class,
+            },
         );
         let call = entry.call.clone();
         let data = envelope.data.clone();

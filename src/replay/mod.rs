@@ -1,0 +1,506 @@
+//! `tca log replay`: a recorded walk run again with some modules played back from its traffic
+//! log, comparing everything the live modules send with the record (§3.3: the log as a tool
+//! for finding interface and timing errors; here, a regression test of the planners).
+//!
+//! # Usage
+//!
+//! ```text
+//! tca walk --course 4 --seed 1 --out out/c4          # records out/c4/traffic.mcap
+//! tca log replay out/c4/traffic.mcap --as controller,ism
+//! tca log replay out/c4/traffic.mcap --as controller,ism --gait-params my-gait.toml
+//! ```
+//!
+//! Central runs in-process with the live walking modules (those not named in `--as`: normally
+//! the LTM Manager, PDM, Leg Recovery Planner and Gait Planner, set up as `tca walk` sets them
+//! up) and one stand-in for each module named in `--as`. A stand-in registers the recorded
+//! module's messages with their recorded formats and answers each message with what the
+//! recorded module did for the same (asker, message name), in recorded order: its reply, or
+//! the success or failure of a goal or command, the exceptions it raised there (a
+//! `moveFailed` in a `legMove`'s context) and whatever else it sent while handling, each after
+//! the recorded simulated time. A driver named like the recorded walker then sends the
+//! recorded root goals (the `walk` goal, and the walk back with `--backward`) one after
+//! another, each when the previous has ended.
+//!
+//! Afterwards every message the live modules sent during the replayed goals (queries, goals,
+//! commands, informs, exceptions, replies, successes and failures) is compared with the record,
+//! per (sender, message name) in order, field by field through the registered data formats
+//! (see [`tca_logs::compare`] for what is and is not compared). It prints `N messages
+//! compared, all match`, or the first divergence, e.g.
+//! `first divergence: gait -> recoverLeg #3, field footfall.x_m: recorded 1.55, live 1.65`,
+//! and how many more there are. `--gait-params FILE.toml` runs the Gait Planner with other
+//! parameters (the format of `modules/gait-planner/params/gait.toml`): the way to see a
+//! divergence on purpose. Modules named live that need the terrain (the Controller, the ISM)
+//! need `--course`/`--terrain` and `--seed` as recorded. `--out DIR` keeps the replay's own
+//! traffic log (`DIR/traffic.mcap`); `--json` prints the report as one JSON object on the last
+//! line.
+//!
+//! **Exit status** (like `diff`): 0 when every message matches and the goals end as recorded,
+//! 1 on a divergence, 2 when the log cannot be replayed (unreadable or cut short before the
+//! walk ended, no recorded `walk` goal, a module named in `--as` that is not in the log).
+
+pub mod stand_in;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context as _, bail};
+use serde::Serialize;
+use tca_central::StartOptions;
+use tca_logs::compare::{Rules, Side};
+use tca_logs::{LogFile, RootTask};
+use tca_messages::control::TaskOutcome;
+use tca_messages::{Class, SendOptions};
+use tca_module::{Connector, Module};
+
+use crate::walk::{SystemSetup, TerrainChoice, WALKING_MODULES, connect_module};
+
+/// The root goal whose sender is the walker the driver stands in for.
+pub const WALK_GOAL: &str = "walk";
+
+/// Default wall-clock limit of one replayed goal.
+pub const DEFAULT_GOAL_TIMEOUT: Duration = Duration::from_secs(300);
+
+/// How many divergences a report lists.
+pub const LISTED_DIVERGENCES: usize = 20;
+
+/// What to replay.
+#[derive(Clone, Debug)]
+pub struct ReplayOptions {
+    /// The recorded traffic log (`tca walk --out DIR` writes `DIR/traffic.mcap`).
+    pub log: PathBuf,
+    /// Modules played from the log.
+    pub stand_ins: Vec<String>,
+    /// Run the Gait Planner with these parameters instead of the shipped ones.
+    pub gait_params: Option<PathBuf>,
+    /// The recorded terrain, for a live Controller or ISM.
+    pub terrain: Option<TerrainChoice>,
+    /// The recorded scanner-noise seed, for a live ISM.
+    pub seed: u64,
+    /// Keep the replay's traffic log in this directory.
+    pub out: Option<PathBuf>,
+    /// Wall-clock limit of each replayed goal.
+    pub goal_timeout: Duration,
+}
+
+/// One replayed root goal.
+#[derive(Clone, Debug, Serialize)]
+pub struct GoalReplay {
+    /// Message name.
+    pub name: String,
+    /// How it ended in the record.
+    pub recorded: String,
+    /// How it ended in the replay.
+    pub live: String,
+}
+
+/// What the replay found.
+#[derive(Clone, Debug, Serialize)]
+pub struct ReplayReport {
+    /// The recorded log.
+    pub log: PathBuf,
+    /// Modules played from the log.
+    pub played: Vec<String>,
+    /// Modules run live.
+    pub live: Vec<String>,
+    /// Messages compared.
+    pub compared: usize,
+    /// Every message matched and every goal ended as recorded.
+    pub all_match: bool,
+    /// Messages that differ.
+    pub divergences: usize,
+    /// The first divergence, as printed.
+    pub first_divergence: Option<String>,
+    /// The first [`LISTED_DIVERGENCES`] divergences.
+    pub listed: Vec<tca_logs::Divergence>,
+    /// The replayed root goals.
+    pub goals: Vec<GoalReplay>,
+    /// Per stand-in: deliveries the record had no answer left for.
+    pub unscripted: BTreeMap<String, usize>,
+    /// Per stand-in: recorded deliveries (from live modules or stand-ins, during the replayed
+    /// goals) never asked for.
+    pub unplayed: BTreeMap<String, usize>,
+    /// Wall-clock time of the replay, seconds.
+    pub wall_time_s: f64,
+    /// The replay's own traffic log, if kept (`--out`).
+    pub replay_log: Option<PathBuf>,
+}
+
+impl ReplayReport {
+    /// The report as text lines.
+    pub fn text(&self) -> String {
+        let mut s = format!(
+            "replayed {}: {} played from the log; {} live\n",
+            self.log.display(),
+            list(&self.played),
+            list(&self.live)
+        );
+        for g in &self.goals {
+            s += &format!(
+                "{} goal: recorded {}, replay {}\n",
+                g.name, g.recorded, g.live
+            );
+        }
+        for (m, n) in self.unscripted.iter().filter(|(_, n)| **n > 0) {
+            s += &format!("{m}: {n} deliveries had no recorded answer left\n");
+        }
+        for (m, n) in self.unplayed.iter().filter(|(_, n)| **n > 0) {
+            s += &format!("{m}: {n} recorded deliveries were never asked for\n");
+        }
+        match &self.first_divergence {
+            None if self.all_match => {
+                s += &format!(
+                    "{} messages compared, all match ({:.1} s)\n",
+                    self.compared, self.wall_time_s
+                )
+            }
+            None => {
+                s += &format!(
+                    "{} messages compared, all match, but the goals did not end as recorded\n",
+                    self.compared
+                )
+            }
+            Some(first) => {
+                s += &format!("first divergence: {first}\n");
+                let further = self.divergences.saturating_sub(1);
+                s += &format!(
+                    "{further} further divergences; {} messages compared ({:.1} s)\n",
+                    self.compared, self.wall_time_s
+                );
+                for d in self.listed.iter().skip(1) {
+                    s += &format!("  {d}\n");
+                }
+                if self.divergences > self.listed.len() {
+                    s += &format!("  ... and {} more\n", self.divergences - self.listed.len());
+                }
+            }
+        }
+        if let Some(p) = &self.replay_log {
+            s += &format!("replay log: {}\n", p.display());
+        }
+        s
+    }
+}
+
+fn list(names: &[String]) -> String {
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names.join(", ")
+    }
+}
+
+fn describe(outcome: Option<&TaskOutcome>) -> String {
+    match outcome {
+        Some(TaskOutcome::Achieved) => "achieved".into(),
+        Some(TaskOutcome::Failed(r)) => format!("failed ({r})"),
+        Some(TaskOutcome::Killed) => "killed".into(),
+        None => "did not end".into(),
+    }
+}
+
+/// What of the record is replayed: the walker and its root goals.
+#[derive(Debug)]
+struct Recorded {
+    log: LogFile,
+    walker: String,
+    roots: Vec<RootTask>,
+    modules: Vec<String>,
+}
+
+fn read_record(path: &Path) -> anyhow::Result<Recorded> {
+    let log = LogFile::open(path).with_context(|| format!("cannot read log {}", path.display()))?;
+    let walker = log.records.iter().find_map(|r| {
+        let tca_logs::RecordKind::Frame(f) = &r.kind else {
+            return None;
+        };
+        let env = LogFile::envelope(f).ok()?;
+        (f.direction == tca_logs::Direction::In
+            && env.class == Class::Goal
+            && env.name.as_str() == WALK_GOAL
+            && env.context.is_none())
+        .then(|| env.sender.to_string())
+    });
+    let cut = log
+        .truncated
+        .as_ref()
+        .map(|t| format!(" ({t})"))
+        .unwrap_or_default();
+    let Some(walker) = walker else {
+        bail!(
+            "{} holds no `{WALK_GOAL}` goal sent by a user{cut}, so it is not the log of a walk \
+             and there is nothing to replay; record one with `tca walk --out DIR` and replay \
+             DIR/traffic.mcap",
+            path.display()
+        );
+    };
+    let roots = walk_roots(&log, &walker);
+    if let Some(open) = roots.iter().find(|r| r.outcome.is_none()) {
+        bail!(
+            "the recorded {} goal never ends in {}{cut}: the record is incomplete, so there is \
+             nothing complete to compare with; record the walk again",
+            open.envelope.name,
+            path.display()
+        );
+    }
+    let modules = tca_logs::connection_order(&log)
+        .into_iter()
+        .map(|m| m.to_string())
+        .collect();
+    Ok(Recorded {
+        log,
+        walker,
+        roots,
+        modules,
+    })
+}
+
+/// The walker's root `walk` goals (its other root tasks, such as drawing the map afterwards,
+/// are not part of the walk).
+fn walk_roots(log: &LogFile, walker: &str) -> Vec<RootTask> {
+    let mut roots = tca_logs::root_tasks(log, walker);
+    roots.retain(|r| r.envelope.name.as_str() == WALK_GOAL);
+    roots
+}
+
+/// The window of a log the replay covers: from the first root goal to the end of the last.
+fn window(roots: &[RootTask], len: usize) -> std::ops::Range<usize> {
+    let start = roots.first().map_or(len, |r| r.position);
+    let end = match roots.last().and_then(|r| r.outcome.as_ref()) {
+        Some((_, end)) => end + 1,
+        None => len,
+    };
+    start..end.max(start)
+}
+
+/// A directory for the replay's log: `out`, or a fresh one under the system's temp dir
+/// (removed afterwards).
+fn log_dir(out: Option<&Path>) -> anyhow::Result<(PathBuf, bool)> {
+    if let Some(dir) = out {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        return Ok((dir.to_owned(), true));
+    }
+    let stamp = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_nanos())
+        .unwrap_or(0);
+    let dir = std::env::temp_dir().join(format!("tca-replay-{}-{stamp}", std::process::id()));
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    Ok((dir, false))
+}
+
+/// Connects a live walking module; the Gait Planner with `gait_params` if given.
+async fn connect_live(
+    name: &str,
+    connector: &Connector,
+    setup: &SystemSetup,
+    gait_params: Option<&tca_gait_planner::GaitParams>,
+) -> anyhow::Result<Module> {
+    let module = match (name, gait_params) {
+        ("gait", Some(params)) => {
+            // As `connect_module` sets it up, with other parameters.
+            let config = tca_gait_planner::GaitConfig {
+                params: *params,
+                simulated_time: true,
+                ..tca_gait_planner::GaitConfig::default()
+            };
+            tca_gait_planner::connect(connector, config).await
+        }
+        _ => connect_module(name, connector, setup).await,
+    };
+    module.with_context(|| format!("cannot start the live {name} module"))
+}
+
+/// Replays a recorded walk (see the module documentation). An `Err` means the log cannot be
+/// replayed; divergences are in the report.
+pub async fn replay(options: &ReplayOptions) -> anyhow::Result<ReplayReport> {
+    let started = Instant::now();
+    let recorded = read_record(&options.log)?;
+    let mut played: Vec<String> = Vec::new();
+    for name in &options.stand_ins {
+        if name == &recorded.walker {
+            bail!(
+                "{name} is the walker whose goals the replay sends; name the modules to play \
+                 from the log (recorded: {})",
+                recorded.modules.join(", ")
+            );
+        }
+        if !recorded.modules.contains(name) {
+            bail!(
+                "--as {name}: no module {name} in {}; the recorded modules are {}",
+                options.log.display(),
+                recorded.modules.join(", ")
+            );
+        }
+        if !played.contains(name) {
+            played.push(name.clone());
+        }
+    }
+    let live: Vec<String> = recorded
+        .modules
+        .iter()
+        .filter(|m| WALKING_MODULES.contains(&m.as_str()) && !played.contains(m))
+        .cloned()
+        .collect();
+    for other in recorded
+        .modules
+        .iter()
+        .filter(|m| !played.contains(m) && !live.contains(m) && **m != recorded.walker)
+    {
+        tracing::warn!(module = %other, "not a walking module: left out of the replay");
+    }
+    let needs_terrain = live.iter().find(|m| *m == "controller" || *m == "ism");
+    let setup = match (&options.terrain, needs_terrain) {
+        (Some(t), _) => SystemSetup::new(t.clone(), options.seed)?,
+        (None, Some(m)) => bail!(
+            "{m} runs live in this replay and needs the recorded terrain: give --course N (or \
+             --terrain FILE.asc) and --seed N as recorded, or play it from the log with --as {m}"
+        ),
+        // The planners never read the terrain: any will do.
+        (None, None) => SystemSetup::new(TerrainChoice::Course(1), options.seed)?,
+    };
+    let gait_params = match &options.gait_params {
+        Some(p) => Some(
+            tca_gait_planner::GaitParams::load(p)
+                .with_context(|| format!("cannot load gait parameters {}", p.display()))?,
+        ),
+        None => None,
+    };
+    let mut scripts = BTreeMap::new();
+    for name in &played {
+        let script = tca_logs::module_script(&recorded.log, name)
+            .with_context(|| format!("{name} is not in the log"))?;
+        scripts.insert(name.clone(), script);
+    }
+    let walker_script = tca_logs::module_script(&recorded.log, &recorded.walker)
+        .with_context(|| format!("the walker {} is not in the log", recorded.walker))?;
+
+    let (dir, keep) = log_dir(options.out.as_deref())?;
+    let log_path = dir.join("traffic.mcap");
+    // Whatever a live module draws goes next to the replay's log, never over the record's.
+    let mut setup = setup;
+    setup.out = Some(dir.clone());
+    let central = tca_central::start(StartOptions {
+        log: Some(log_path.clone()),
+        ..StartOptions::default()
+    })
+    .await
+    .context("cannot start central")?;
+    let connector = Connector::InProcess(central.handle());
+    // Connect in the recorded order, so link numbers (and message ids) come out the same.
+    let mut stand_ins = Vec::new();
+    let mut modules = Vec::new();
+    for name in &recorded.modules {
+        if let Some(script) = scripts.remove(name) {
+            let s = stand_in::connect(&connector, script)
+                .await
+                .with_context(|| format!("cannot start the stand-in for {name}"))?;
+            stand_ins.push((name.clone(), s));
+        } else if live.contains(name) {
+            modules.push(connect_live(name, &connector, &setup, gait_params.as_ref()).await?);
+        }
+    }
+    // The driver plays the walker's handlers (the `stepPlanned` informs it listens to) and
+    // sends its walk goals.
+    let driver = stand_in::connect(&connector, walker_script)
+        .await
+        .context("the replay's driver cannot join central")?;
+    let driver_module = driver.module.clone();
+    let mut goals = Vec::new();
+    for root in &recorded.roots {
+        let env = &root.envelope;
+        let now = driver_module.time_ns();
+        if env.timestamp_ns > now {
+            driver_module.spend(Duration::from_nanos(env.timestamp_ns - now));
+        }
+        let recorded_outcome = root.outcome.as_ref().map(|(o, _)| o);
+        let task = driver_module.send_raw(
+            env.class,
+            env.name.as_str(),
+            env.data.clone(),
+            SendOptions {
+                notify: true,
+                ..SendOptions::default()
+            },
+        )?;
+        let live = match tokio::time::timeout(options.goal_timeout, task.outcome()).await {
+            Ok(Ok(o)) => describe(Some(&o)),
+            Ok(Err(e)) => format!("lost ({e})"),
+            Err(_) => format!("did not end within {:?}", options.goal_timeout),
+        };
+        let ended = !live.starts_with("did not end") && !live.starts_with("lost");
+        goals.push(GoalReplay {
+            name: env.name.to_string(),
+            recorded: describe(recorded_outcome),
+            live,
+        });
+        if !ended {
+            break;
+        }
+    }
+    let unscripted: BTreeMap<String, usize> = stand_ins
+        .iter()
+        .map(|(n, s)| (n.clone(), s.unscripted()))
+        .collect();
+    let rec_window = window(&recorded.roots, recorded.log.records.len());
+    let unplayed: BTreeMap<String, usize> = stand_ins
+        .iter()
+        .map(|(n, s)| {
+            let counted = |position: usize, asker: &str| {
+                rec_window.contains(&position) && asker != recorded.walker
+            };
+            (n.clone(), s.unplayed(counted))
+        })
+        .collect();
+    driver_module.close().await;
+    for (_, s) in &stand_ins {
+        s.module.close().await;
+    }
+    for m in &modules {
+        m.close().await;
+    }
+    central
+        .shutdown()
+        .await
+        .context("central did not stop cleanly")?;
+    let live_log = LogFile::open(&log_path)
+        .with_context(|| format!("cannot read the replay's log {}", log_path.display()))?;
+    if !keep {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    let live_roots = walk_roots(&live_log, &recorded.walker);
+    let live_window = window(&live_roots, live_log.records.len());
+    let comparison = tca_logs::compare(
+        Side {
+            log: &recorded.log,
+            window: &rec_window,
+        },
+        Side {
+            log: &live_log,
+            window: &live_window,
+        },
+        &live,
+        &Rules::default(),
+    );
+    let goals_match =
+        goals.len() == recorded.roots.len() && goals.iter().all(|g| g.recorded == g.live);
+    Ok(ReplayReport {
+        log: options.log.clone(),
+        played,
+        live,
+        compared: comparison.compared,
+        all_match: comparison.all_match() && goals_match,
+        divergences: comparison.divergences.len(),
+        first_divergence: comparison.divergences.first().map(|d| d.to_string()),
+        listed: comparison
+            .divergences
+            .into_iter()
+            .take(LISTED_DIVERGENCES)
+            .collect(),
+        goals,
+        unscripted,
+        unplayed,
+        wall_time_s: started.elapsed().as_secs_f64(),
+        replay_log: keep.then_some(log_path),
+    })
+}
