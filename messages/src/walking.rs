@@ -410,6 +410,19 @@ pub struct RecoverLeg {
     pub footfall: WorldPoint,
     /// The carriage Y during the move.
     pub body_y_m: f64,
+    /// The way the elbow must bend at the footfall (the body move that follows keeps it, so
+    /// its reach depends on it); `None`: either.
+    pub elbow: Option<ElbowSide>,
+}
+
+/// The way the leg's elbow bends: the sign of the elbow angle (the two inverse-kinematics
+/// solutions for one foot position).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ElbowSide {
+    /// Elbow angle at or above zero.
+    Positive,
+    /// Elbow angle below zero.
+    Negative,
 }
 message!(RecoverLeg: goal "recoverLeg");
 

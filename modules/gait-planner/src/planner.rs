@@ -42,6 +42,9 @@ pub struct StepPlan {
     pub body_target_y_m: f64,
     /// The body move, metres (negative walking backward).
     pub advance_m: f64,
+    /// The elbow branch the advance was computed for: the foot must land with the elbow
+    /// bent this way (a body move cannot change it).
+    pub elbow: ElbowBranch,
     /// The composite cost of the chosen cell.
     pub cost: f64,
     /// The chosen cell of the region's grid.
@@ -309,6 +312,11 @@ impl GaitPlanner {
         let centre = region.layout.cell_center(cell);
         let ground = ground_m.get(cell).copied().flatten().unwrap_or(0.0);
         let advance_m = region.direction.sign() * a_max.min(step_limit);
+        let elbow = advance
+            .get(cell)
+            .copied()
+            .flatten()
+            .map_or(ElbowBranch::Positive, |(_, b)| b);
         tracing::debug!(
             x_m = centre.x,
             y_m = centre.y,
@@ -320,6 +328,7 @@ impl GaitPlanner {
             footfall: Point3::new(centre.x, centre.y, ground),
             body_target_y_m: body_y_m + advance_m,
             advance_m,
+            elbow,
             cost,
             cell,
             maps: CostMaps {

@@ -17,8 +17,8 @@ use std::time::Instant;
 use nalgebra::Point2;
 use tca_lrp::TerrainMap;
 use tca_messages::walking::{
-    BodyMove, BodyPosition, GlobalLegPosition, LegReachability, MapKind, MapRegion, PlanStep,
-    RecoverLeg, StepPlanned, WorldPoint,
+    BodyMove, BodyPosition, ElbowSide, GlobalLegPosition, LegReachability, MapKind, MapRegion,
+    PlanStep, RecoverLeg, StepPlanned, WorldPoint,
 };
 use tca_module::{
     Connector, ConstraintSpec, Context, HandlerError, Module, ModuleError, SendOptions, TaskRef,
@@ -104,6 +104,10 @@ pub async fn connect(connector: &Connector, config: GaitConfig) -> Result<Module
 impl Shared {
     async fn plan_step(&self, ctx: &Context, step: PlanStep) -> Result<(), HandlerError> {
         if let (Some(walk), Some(me)) = (ctx.origin(), ctx.node()) {
+            if self.walks.is_stale(walk, step.step) {
+                tracing::debug!(step = step.step, "step abandoned by a replan: not planned");
+                return Ok(());
+            }
             self.walks.step_started(walk, me);
         }
         // Planned ahead (concurrent walking): start where the previous step will leave the
@@ -181,6 +185,15 @@ impl Shared {
         if ctx.simulated_time() {
             ctx.spend(began.elapsed());
         }
+        if let Some(walk) = ctx.origin()
+            && self.walks.is_stale(walk, step.step)
+        {
+            tracing::debug!(
+                step = step.step,
+                "step abandoned by a replan while planning"
+            );
+            return Ok(());
+        }
         let footfall = WorldPoint {
             x_m: plan.footfall.x,
             y_m: plan.footfall.y,
@@ -195,7 +208,18 @@ impl Shared {
                 TaskRef::This,
             ));
         }
-        let leg = ctx.send_task(&RecoverLeg { footfall, body_y_m }, leg_options)?;
+        let elbow = Some(match plan.elbow {
+            tca_robot::ElbowBranch::Positive => ElbowSide::Positive,
+            tca_robot::ElbowBranch::Negative => ElbowSide::Negative,
+        });
+        let leg = ctx.send_task(
+            &RecoverLeg {
+                footfall,
+                body_y_m,
+                elbow,
+            },
+            leg_options,
+        )?;
         let body = ctx.send_task(
             &BodyMove {
                 target_y_m: plan.body_target_y_m,
@@ -235,6 +259,7 @@ impl Shared {
         if let (Some(walk), false) = (ctx.origin(), reaches_goal) {
             let walk_ctx = ctx.in_context(Some(walk));
             let next = crate::walk::next_step(&step, plan.body_target_y_m, footfall, body.id());
+            self.walks.step_sent(walk, next.step);
             walk_ctx.send_task(&next, crate::walk::next_step_options(&step, &body))?;
         }
         Ok(())

@@ -34,8 +34,12 @@ struct WalkState {
     goal_y_m: f64,
     mode: WalkMode,
     replans: u32,
+    /// The highest step number sent so far.
     steps_sent: u32,
-    /// Step nodes that have started, most recent last.
+    /// Steps numbered below this belong to a chain a replan abandoned: if one still reaches
+    /// the Gait Planner (it was waiting on a constraint when the others were killed), it
+    /// ends at once without planning.
+    first_live_step: u32,
     live_steps: Vec<NodeId>,
 }
 
@@ -54,8 +58,21 @@ impl Walks {
     pub fn step_started(&self, walk: NodeId, step: NodeId) {
         if let Some(w) = self.lock().get_mut(&walk) {
             w.live_steps.push(step);
-            w.steps_sent = w.steps_sent.max(w.live_steps.len() as u32);
         }
+    }
+
+    /// Notes that step number `step` was sent in walk `walk`.
+    pub fn step_sent(&self, walk: NodeId, step: u32) {
+        if let Some(w) = self.lock().get_mut(&walk) {
+            w.steps_sent = w.steps_sent.max(step);
+        }
+    }
+
+    /// Whether step number `step` of walk `walk` was abandoned by a replan.
+    pub fn is_stale(&self, walk: NodeId, step: u32) -> bool {
+        self.lock()
+            .get(&walk)
+            .is_some_and(|w| step < w.first_live_step)
     }
 }
 
@@ -98,6 +115,7 @@ async fn start_walk(ctx: &Context, walk: Walk, walks: &Walks) -> Result<(), Hand
             mode: walk.mode,
             replans: 0,
             steps_sent: 1,
+            first_live_step: 1,
             live_steps: Vec::new(),
         },
     );
@@ -166,6 +184,7 @@ async fn replan(
         };
         state.replans += 1;
         state.steps_sent += 1;
+        state.first_live_step = state.steps_sent;
         (state.clone(), std::mem::take(&mut state.live_steps))
     };
     tracing::warn!(

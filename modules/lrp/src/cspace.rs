@@ -64,6 +64,9 @@ pub struct CSpace {
     z_min_m: f64,
     z_max_m: f64,
     foot_radius_m: f64,
+    /// Radius obstacles are grown by before the cell's own growth: foot plus margin, metres.
+    base_radius_m: f64,
+    clearance_m: f64,
     obstacles: ObstacleHeights,
 }
 
@@ -117,12 +120,14 @@ impl CSpace {
             z_min_m: link_plane_m - vertical.max,
             z_max_m: link_plane_m - vertical.min,
             foot_radius_m: leg.leg.foot_radius_m,
+            base_radius_m: leg.leg.foot_radius_m + params.uncertainty_margin_m,
+            clearance_m: params.clearance_m,
             obstacles,
         };
-        let base = cs.foot_radius_m + params.uncertainty_margin_m;
+        let base = cs.base_radius_m;
         for ie in 0..ne {
             let e = cs.e_min + (ie as f64 + 0.5) * de;
-            let growth = cs.reach_max_m(e - 0.5 * de, e + 0.5 * de) * 0.5 * ds + l2 * 0.5 * de;
+            let growth = cs.cell_growth_m(ie);
             for is in 0..ns {
                 let s = cs.s_min + (is as f64 + 0.5) * ds;
                 let h = cs
@@ -132,6 +137,37 @@ impl CSpace {
             }
         }
         Ok(cs)
+    }
+
+    /// How far the foot can be from the centre of a cell of elbow row `ie` while the joints
+    /// stay in the cell, metres (the growth of obstacles for that row).
+    fn cell_growth_m(&self, ie: usize) -> f64 {
+        let (ds, de) = (self.ds, self.de);
+        let e = self.e_min + (ie as f64 + 0.5) * de;
+        self.reach_max_m(e - 0.5 * de, e + 0.5 * de) * 0.5 * ds + self.lower_link_m * 0.5 * de
+    }
+
+    /// The requirement of a start cell counting known terrain only: the leg stands in the
+    /// cell, so the occluded and unknown terrain around it was crossed to get there and is
+    /// not taken as an obstacle (known obstacles still are). Metres, world Z.
+    pub fn start_requirement_m(&self, c: CCell) -> f64 {
+        let (s, e) = self.centre(c);
+        let radius = self.base_radius_m + self.cell_growth_m(c.ie);
+        self.obstacles
+            .max_known_in_disc(self.foot_xy(s, e), radius)
+            .unwrap_or(f64::NEG_INFINITY)
+            + self.clearance_m
+    }
+
+    /// A copy of the space with one cell's requirement lowered to `required_m` (a start
+    /// cell relaxed by [`start_requirement_m`](Self::start_requirement_m)).
+    pub fn with_relaxed_cell(&self, c: CCell, required_m: f64) -> Self {
+        let mut cs = self.clone();
+        let i = cs.index(c);
+        if let Some(r) = cs.required_m.get_mut(i) {
+            *r = r.min(required_m);
+        }
+        cs
     }
 
     /// Largest distance of the foot from the shoulder axis for elbows in `[lo, hi]`.
@@ -417,8 +453,9 @@ mod tests {
         let cs = space(&flat_map(0.1));
         // A cell whose grown disc stays on the map.
         let c = cs.cell_at(1.5, 0.8);
+        let clearance = LrpParams::default().clearance_m;
         assert!(
-            (cs.required_m(c) - 0.15).abs() < 1e-9,
+            (cs.required_m(c) - (0.1 + clearance)).abs() < 1e-9,
             "{}",
             cs.required_m(c)
         );
@@ -459,7 +496,8 @@ mod tests {
         assert!(!tall.is_free(c));
         let low = build(0.4);
         assert!(low.is_free(c));
-        assert!((low.required_m(c) - 0.45).abs() < 1e-9);
+        let clearance = LrpParams::default().clearance_m;
+        assert!((low.required_m(c) - (0.4 + clearance)).abs() < 1e-9);
     }
 
     #[test]

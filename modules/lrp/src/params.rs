@@ -25,6 +25,11 @@ pub struct LrpParams {
     /// The foot may start this far below the mapped terrain (map noise, a foot pressed into
     /// sand) before the start counts as a collision, metres.
     pub start_tolerance_m: f64,
+    /// Every trajectory first lifts the foot straight up at least this far, metres: a foot
+    /// on the ground (or one that just struck terrain the map got wrong) clears it before
+    /// any sideways motion.
+    #[serde(default = "default_start_lift_m")]
+    pub start_lift_m: f64,
     /// The transition move aims this far below the expected ground, metres, so that it
     /// stops on contact even when the ground is lower than mapped.
     pub transition_overshoot_m: f64,
@@ -40,15 +45,20 @@ impl Default for LrpParams {
         Self {
             shoulder_cell_rad: 0.08,
             uncertainty_margin_m: 0.05,
-            clearance_m: 0.05,
+            clearance_m: 0.10,
             sigma_factor: 2.0,
             unknown_height_m: 0.8,
             start_tolerance_m: 0.05,
+            start_lift_m: default_start_lift_m(),
             transition_overshoot_m: 0.15,
             footfall_low_margin_m: 0.05,
             cost: CostModel::default(),
         }
     }
+}
+
+fn default_start_lift_m() -> f64 {
+    0.1
 }
 
 impl LrpParams {
@@ -69,6 +79,7 @@ impl LrpParams {
             ("clearance_m", self.clearance_m),
             ("sigma_factor", self.sigma_factor),
             ("start_tolerance_m", self.start_tolerance_m),
+            ("start_lift_m", self.start_lift_m),
             ("transition_overshoot_m", self.transition_overshoot_m),
             ("footfall_low_margin_m", self.footfall_low_margin_m),
         ];

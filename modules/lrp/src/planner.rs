@@ -1,6 +1,7 @@
 //! The Leg Recovery Planner as a plain struct: checks its inputs, builds the configuration
 //! space, runs the ETFA, extracts and verifies the trajectory, and answers reachability.
 
+use std::borrow::Cow;
 use std::collections::VecDeque;
 
 use nalgebra::{Point2, Point3};
@@ -64,7 +65,7 @@ impl LegPlan {
 /// Which footfalls the foot can reach from where it is (the Gait Planner's binary map).
 #[derive(Debug, Clone)]
 pub struct Reachability<'a> {
-    cs: &'a CSpace,
+    cs: Cow<'a, CSpace>,
     reachable: Vec<bool>,
 }
 
@@ -168,15 +169,42 @@ impl LegRecoveryPlanner {
         self.plan_in(&cs, start, footfall)
     }
 
-    /// Plans in a configuration space already built.
+    /// Plans in a configuration space already built, landing on either elbow branch.
     pub fn plan_in(
         &self,
         cs: &CSpace,
         start: &JointPosition,
         footfall: &Point3<f64>,
     ) -> Result<LegPlan> {
-        let (start_cell, z0) = self.check_start(cs, start)?;
-        let goal = self.check_goal(cs, footfall)?;
+        self.plan_on_branch(cs, start, footfall, None)
+    }
+
+    /// Plans in a configuration space already built, landing on elbow branch `elbow` if
+    /// given (the body move that follows keeps the branch, so the Gait Planner's advance
+    /// depends on it).
+    pub fn plan_on_branch(
+        &self,
+        cs: &CSpace,
+        start: &JointPosition,
+        footfall: &Point3<f64>,
+        elbow: Option<ElbowBranch>,
+    ) -> Result<LegPlan> {
+        let spec = self.check_start(cs, start)?;
+        let relaxed;
+        let cs = match spec.relaxed_m {
+            Some(r) => {
+                relaxed = cs.with_relaxed_cell(spec.cell, r);
+                &relaxed
+            }
+            None => cs,
+        };
+        let start_cell = spec.cell;
+        // The initial straight lift (at least `start_lift_m`, within reach): the search and
+        // the trajectory start from its top.
+        let (_, z_max) = cs.z_range_m();
+        let z_true = spec.z0;
+        let z0 = (z_true + self.params.start_lift_m).min(z_max).max(z_true);
+        let goal = self.check_goal(cs, footfall, elbow)?;
         let outcome = etfa::search(cs, &self.params.cost, start_cell, z0, &goal.search).ok_or(
             PlanError::Unreachable {
                 x_m: footfall.x,
@@ -188,12 +216,22 @@ impl LegRecoveryPlanner {
             .get(outcome.goal)
             .copied()
             .ok_or_else(|| PlanError::Internal("the search reached an unknown goal".into()))?;
-        let points = trajectory::extract(
+        let mut points = trajectory::extract(
             cs,
             &outcome.cells,
             [start.shoulder_rad, start.elbow_rad, z0],
             [q_goal.shoulder_rad, q_goal.elbow_rad, goal.ground_m],
         )?;
+        if z0 > z_true {
+            points.insert(0, [start.shoulder_rad, start.elbow_rad, z_true]);
+            // One straight lift, not two.
+            if points.len() >= 3
+                && (points[2][0] - start.shoulder_rad).abs() < 1e-12
+                && (points[2][1] - start.elbow_rad).abs() < 1e-12
+            {
+                points.remove(1);
+            }
+        }
         trajectory::check_clearance(cs, &points).map_err(PlanError::Internal)?;
         let motion = self.params.cost.path(cs.speeds(), &points);
         let mut waypoints: Vec<JointPosition> = points
@@ -232,7 +270,12 @@ impl LegRecoveryPlanner {
         cs: &'a CSpace,
         start: &JointPosition,
     ) -> Result<Reachability<'a>> {
-        let (start_cell, _) = self.check_start(cs, start)?;
+        let spec = self.check_start(cs, start)?;
+        let cs: Cow<'a, CSpace> = match spec.relaxed_m {
+            Some(r) => Cow::Owned(cs.with_relaxed_cell(spec.cell, r)),
+            None => Cow::Borrowed(cs),
+        };
+        let start_cell = spec.cell;
         let (ns, ne) = cs.dims();
         let (_, z_max) = cs.z_range_m();
         let mut reachable = vec![false; ns * ne];
@@ -250,8 +293,13 @@ impl LegRecoveryPlanner {
         Ok(Reachability { cs, reachable })
     }
 
-    /// The start must be within limits, not inside mapped terrain, and free to move.
-    fn check_start(&self, cs: &CSpace, start: &JointPosition) -> Result<(CCell, f64)> {
+    /// The start must be within limits, not inside mapped terrain, and free to move. The map
+    /// near a planted foot is often a little above the sole (sand pressed down, the map's
+    /// uncertainty): the trajectory lifts the foot straight up first, so only a map that is
+    /// sure the ground is more than `start_tolerance_m` above the sole is a collision. A start
+    /// cell blocked only by occluded or unknown terrain (the leg got there) is relaxed to its
+    /// known terrain; the relaxed requirement is returned.
+    fn check_start(&self, cs: &CSpace, start: &JointPosition) -> Result<StartSpec> {
         if !start.is_finite() {
             return Err(PlanError::NotFinite {
                 what: "start joint position",
@@ -262,7 +310,9 @@ impl LegRecoveryPlanner {
             .map_err(PlanError::StartOutOfLimits)?;
         let z0 = cs.foot_z_m(start);
         let xy = cs.foot_xy(start.shoulder_rad, start.elbow_rad);
-        if let Some(top) = cs.obstacles().max_known_in_disc(xy, cs.foot_radius_m())
+        if let Some(top) = cs
+            .obstacles()
+            .max_known_lower_in_disc(xy, cs.foot_radius_m())
             && top > z0 + self.params.start_tolerance_m
         {
             return Err(PlanError::StartInCollision {
@@ -272,18 +322,40 @@ impl LegRecoveryPlanner {
             });
         }
         let cell = cs.cell_at(start.shoulder_rad, start.elbow_rad);
-        if !cs.is_free(cell) {
+        if cs.is_free(cell) {
+            return Ok(StartSpec {
+                cell,
+                z0,
+                relaxed_m: None,
+            });
+        }
+        let relaxed = cs.start_requirement_m(cell);
+        if relaxed > cs.z_range_m().1 {
             return Err(PlanError::StartBlocked {
-                required_m: cs.required_m(cell),
+                required_m: relaxed,
                 max_m: cs.z_range_m().1,
             });
         }
-        Ok((cell, z0))
+        tracing::debug!(
+            blocked_m = cs.required_m(cell),
+            relaxed_m = relaxed,
+            "start cell blocked by occluded or unknown terrain only: relaxed"
+        );
+        Ok(StartSpec {
+            cell,
+            z0,
+            relaxed_m: Some(relaxed),
+        })
     }
 
     /// The footfall must be on known ground within the foot's height range, within reach,
     /// and not inside grown obstacles.
-    fn check_goal(&self, cs: &CSpace, footfall: &Point3<f64>) -> Result<GoalSpec> {
+    fn check_goal(
+        &self,
+        cs: &CSpace,
+        footfall: &Point3<f64>,
+        elbow: Option<ElbowBranch>,
+    ) -> Result<GoalSpec> {
         if !(footfall.x.is_finite() && footfall.y.is_finite() && footfall.z.is_finite()) {
             return Err(PlanError::NotFinite { what: "footfall" });
         }
@@ -314,7 +386,11 @@ impl LegRecoveryPlanner {
             .to_carriage(self.kin.carriage(), &Point3::new(x_m, y_m, ground_m));
         let mut joints = Vec::new();
         let mut first_error = None;
-        for branch in [ElbowBranch::Positive, ElbowBranch::Negative] {
+        let branches = match elbow {
+            Some(b) => vec![b],
+            None => vec![ElbowBranch::Positive, ElbowBranch::Negative],
+        };
+        for branch in branches {
             match self.kin.inverse(&p, branch) {
                 Ok(q) => joints.push(q),
                 Err(e) => {
@@ -359,6 +435,14 @@ impl LegRecoveryPlanner {
             target_m,
         })
     }
+}
+
+/// A checked start.
+struct StartSpec {
+    cell: CCell,
+    z0: f64,
+    /// The start cell's requirement when relaxed.
+    relaxed_m: Option<f64>,
 }
 
 /// A checked footfall.

@@ -14,8 +14,8 @@ use std::time::Instant;
 
 use nalgebra::{Point2, Point3};
 use tca_messages::walking::{
-    BodyPosition, JointLegPosition, Joints, LegReachability, MapCell, MapGrid, MapKind, MapRegion,
-    MoveFailed, MoveFailureKind, RecoverLeg, WorldPoint,
+    BodyPosition, ElbowSide, JointLegPosition, Joints, LegReachability, MapCell, MapGrid, MapKind,
+    MapRegion, MoveFailed, MoveFailureKind, RecoverLeg, WorldPoint,
 };
 use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
 use tca_robot::{CarriagePose, JointPosition, LegKinematics, LegParams};
@@ -160,9 +160,13 @@ impl Shared {
         let began = Instant::now();
         let planner = self.planner.clone();
         let body_y = goal.body_y_m;
+        let elbow = goal.elbow.map(|side| match side {
+            ElbowSide::Positive => tca_robot::ElbowBranch::Positive,
+            ElbowSide::Negative => tca_robot::ElbowBranch::Negative,
+        });
         let planned = tokio::task::spawn_blocking(move || {
             let cs = planner.cspace(&map, body_y)?;
-            let plan = planner.plan_in(&cs, &start, &footfall)?;
+            let plan = planner.plan_on_branch(&cs, &start, &footfall, elbow)?;
             Ok::<_, crate::PlanError>((cs, plan))
         })
         .await

@@ -234,6 +234,9 @@ pub struct ObstacleHeights {
     height_m: Vec<f64>,
     /// Whether the cell is known (for the footfall checks).
     known: Vec<bool>,
+    /// Lowest height the map allows per known cell (`value - sigma_factor * sigma`), metres;
+    /// negative infinity elsewhere.
+    lower_m: Vec<f64>,
     /// Range maxima along rows: `row_max[k][iy * nx + ix]` is the highest of the `2^k` cells
     /// from `ix` on (a sparse table, for fast disc maxima).
     row_max: Vec<Vec<f64>>,
@@ -247,14 +250,22 @@ impl ObstacleHeights {
         let g = map.grid();
         let mut height_m = Vec::with_capacity(g.len());
         let mut known = Vec::with_capacity(g.len());
+        let mut lower_m = Vec::with_capacity(g.len());
         for v in g.cells() {
-            let (h, k) = match *v {
-                MapValue::Known { value, sigma_m } => (value + sigma_factor * sigma_m, true),
-                MapValue::Occluded { max_elevation_m } => (max_elevation_m, false),
-                MapValue::Unknown => (unknown_height_m, false),
+            let (h, k, low) = match *v {
+                MapValue::Known { value, sigma_m } => (
+                    value + sigma_factor * sigma_m,
+                    true,
+                    value - sigma_factor * sigma_m,
+                ),
+                MapValue::Occluded { max_elevation_m } => {
+                    (max_elevation_m, false, f64::NEG_INFINITY)
+                }
+                MapValue::Unknown => (unknown_height_m, false, f64::NEG_INFINITY),
             };
             height_m.push(h);
             known.push(k);
+            lower_m.push(low);
         }
         let nx = g.nx();
         let mut row_max = vec![height_m.clone()];
@@ -280,6 +291,7 @@ impl ObstacleHeights {
             ny: g.ny(),
             height_m,
             known,
+            lower_m,
             row_max,
             unknown_height_m,
         }
@@ -380,6 +392,19 @@ impl ObstacleHeights {
         let mut top: Option<f64> = None;
         self.for_cells_in_disc(centre, radius_m, |i| {
             if let (Some(&h), Some(true)) = (self.height_m.get(i), self.known.get(i)) {
+                top = Some(top.map_or(h, |t: f64| t.max(h)));
+            }
+        });
+        top
+    }
+
+    /// Highest lower bound of known terrain over a disc (`value - sigma_factor * sigma`),
+    /// metres; `None` when the disc meets no known cell. Where the map is sure the ground is
+    /// at least this high.
+    pub fn max_known_lower_in_disc(&self, centre: Point2<f64>, radius_m: f64) -> Option<f64> {
+        let mut top: Option<f64> = None;
+        self.for_cells_in_disc(centre, radius_m, |i| {
+            if let (Some(&h), Some(true)) = (self.lower_m.get(i), self.known.get(i)) {
                 top = Some(top.map_or(h, |t: f64| t.max(h)));
             }
         });

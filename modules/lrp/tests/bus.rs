@@ -186,6 +186,7 @@ async fn recover_leg_moves_the_foot_around_the_sun_box() {
                     z_m: ff.z,
                 },
                 body_y_m: 2.0,
+                elbow: None,
             },
             SendOptions {
                 notify: true,
@@ -301,6 +302,7 @@ async fn a_blocked_footfall_raises_move_failed_and_moves_nothing() {
                 z_m: 0.0,
             },
             body_y_m: 2.0,
+            elbow: None,
         }))
         .unwrap();
     let failure = within("moveFailed", failures.recv()).await.unwrap();

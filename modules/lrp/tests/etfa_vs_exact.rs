@@ -13,7 +13,15 @@ use tca_robot::ElbowBranch;
 
 #[test]
 fn etfa_cost_is_within_eight_percent_of_the_exact_optimum() {
-    let p = planner();
+    // Without the minimum initial lift: the exact search knows nothing of it.
+    let p = tca_lrp::LegRecoveryPlanner::new(
+        tca_robot::LegParams::default(),
+        tca_lrp::LrpParams {
+            start_lift_m: 0.0,
+            ..tca_lrp::LrpParams::default()
+        },
+    )
+    .unwrap();
     let model = p.params().cost;
     let mut compared = 0;
     let mut worst: f64 = 0.0;

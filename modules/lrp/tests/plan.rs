@@ -45,9 +45,10 @@ fn on_flat_ground_the_foot_lifts_moves_and_lowers_in_transition() {
         "aims below the sand: {}",
         last.vertical_m
     );
-    // The foot never goes higher than the clearance needs on flat ground.
+    // The foot never goes higher than the clearance or the initial lift needs on flat ground.
     let top = plan.points.iter().map(|p| p[2]).fold(f64::MIN, f64::max);
-    assert!(top <= 0.05 + 1e-9, "{top}");
+    let needed = 0.05f64.max(LrpParams::default().start_lift_m);
+    assert!(top <= needed + 1e-9, "{top}");
     // It ends above the footfall.
     let kin = kin();
     let end = foot_xy(&kin, 4.0, plan.points.last().unwrap());
@@ -305,7 +306,9 @@ fn unknown_terrain_counts_as_an_obstacle_of_the_configured_height() {
         .plan(&map, 4.0, &start, &Point3::new(4.0, 5.5, 0.0))
         .unwrap();
     let peak = plan.points.iter().map(|p| p[2]).fold(f64::MIN, f64::max);
-    assert!((peak - 0.85).abs() < 1e-9, "{peak}");
+    let params = LrpParams::default();
+    let want = params.unknown_height_m + params.clearance_m;
+    assert!((peak - want).abs() < 1e-9, "{peak} against {want}");
     let _: &TerrainMap = &map;
 }
 

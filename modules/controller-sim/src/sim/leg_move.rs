@@ -68,6 +68,10 @@ impl LegSimulator {
         let mut rest: Option<Point3<f64>> = self.planted.or_else(|| {
             (start_gap <= 0.0).then(|| Point3::new(start_free.x, start_free.y, start_height))
         });
+        // Where the leg's kinematic foot was when the contact began: a drag is the leg moving
+        // sideways from there while loaded. (The pinned foot itself may sit a little off the
+        // kinematic one, by the compliance deflection left from a body move.)
+        let mut anchor = Point2::new(start_free.x, start_free.y);
 
         let period = self.params.simulation.report_period_s;
         let mut path = vec![PathSample {
@@ -97,7 +101,7 @@ impl LegSimulator {
                 if gap > 0.0 {
                     rest = None;
                 } else {
-                    let slid = (Point2::new(foot.x, foot.y) - Point2::new(r.x, r.y)).norm();
+                    let slid = (Point2::new(foot.x, foot.y) - anchor).norm();
                     if slid > self.params.simulation.drag_tolerance_m {
                         let error = SimError::Collision {
                             foot_world: r,
@@ -127,6 +131,7 @@ impl LegSimulator {
                 if transition && tc >= last_segment && self.is_touchdown(&traj, tc, &fc) {
                     // Keep pressing along the path until the force reaches the set point.
                     rest = Some(Point3::new(fc.x, fc.y, fc.z.max(hc)));
+                    anchor = Point2::new(fc.x, fc.y);
                     t_prev = tc;
                     continue;
                 }

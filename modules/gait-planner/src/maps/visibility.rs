@@ -70,7 +70,10 @@ mod tests {
 
     #[test]
     fn links_ahead_of_the_carriage_are_seen_and_links_behind_are_not() {
-        let leg = LegParams::default();
+        // The scanner pitched 35° down, the mount this scene was laid out for (the shipped
+        // mount looks more steeply down, at the first footfalls).
+        let mut leg = LegParams::default();
+        leg.scanner.pitch_down_rad = 35f64.to_radians();
         let kin = LegKinematics::new(&leg);
         let region = Region::new(&leg, 0.1, 2.0, Direction::Forward).unwrap();
         let advance = advance_map(&region, &leg, &kin);
