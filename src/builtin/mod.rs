@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use tca_module::{Connector, Module, ModuleError};
 
-use crate::walk::{SystemSetup, TerrainChoice, WALKING_MODULES, connect_module};
+use crate::walk::{ComputeModel, SystemSetup, TerrainChoice, WALKING_MODULES, connect_module};
 
 /// Names of the built-in modules.
 pub const BUILTIN_MODULES: &[&str] = &["echo", "controller", "ism", "ltm", "pdm", "lrp", "gait"];
@@ -24,6 +24,8 @@ pub struct ModuleOptions {
     pub out: Option<PathBuf>,
     /// Write the planners' per-step pictures.
     pub pictures: bool,
+    /// What the planners charge to simulated time.
+    pub compute: ComputeModel,
 }
 
 impl Default for ModuleOptions {
@@ -33,6 +35,7 @@ impl Default for ModuleOptions {
             seed: 1,
             out: None,
             pictures: false,
+            compute: ComputeModel::default(),
         }
     }
 }
@@ -56,6 +59,7 @@ pub async fn connect(
         .map_err(|e| ModuleError::Usage(format!("{e:#}")))?;
     setup.out = options.out.clone();
     setup.step_pictures = options.pictures;
+    setup.compute = options.compute;
     if let Some(dir) = &setup.out {
         std::fs::create_dir_all(dir)
             .map_err(|e| ModuleError::Usage(format!("cannot create {}: {e}", dir.display())))?;

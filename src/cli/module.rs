@@ -29,6 +29,10 @@ pub(crate) struct ModuleArgs {
     /// Write the planners' per-step pictures.
     #[arg(long)]
     pictures: bool,
+    /// What the planners' computing costs in simulated time: "paper" (the 1990 system's
+    /// times) or "measured".
+    #[arg(long, value_enum, default_value_t = tca::walk::ComputeModel::Paper)]
+    compute: tca::walk::ComputeModel,
 }
 
 pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
@@ -39,19 +43,14 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
         .or_else(|| std::env::var("TCA_CONNECT").ok())
         .unwrap_or_else(|| args.connect.endpoint_or_default());
     let connector = Connector::zenoh(endpoint.clone());
-    let terrain = match (&args.terrain, args.course.as_str()) {
-        (Some(path), _) => tca::walk::TerrainChoice::File(path.clone()),
-        (None, "random") => tca::walk::TerrainChoice::Random(args.seed),
-        (None, n) => match n.parse::<u32>() {
-            Ok(n @ 1..=4) => tca::walk::TerrainChoice::Course(n),
-            _ => anyhow::bail!("--course must be 1, 2, 3, 4 or random (got {n:?})"),
-        },
-    };
+    let terrain =
+        tca::walk::TerrainChoice::from_args(&args.course, args.terrain.as_deref(), args.seed)?;
     let options = tca::builtin::ModuleOptions {
         terrain,
         seed: args.seed,
         out: args.out.clone(),
         pictures: args.pictures,
+        compute: args.compute,
     };
     let module = tca::builtin::connect(&args.name, &connector, &options)
         .await

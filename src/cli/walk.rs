@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args;
-use tca::walk::{Progress, TerrainChoice, WalkOptions};
+use tca::walk::{ComputeModel, Progress, TerrainChoice, WalkOptions};
 use tca_messages::walking::WalkMode;
 use tokio::sync::mpsc;
 
@@ -39,20 +39,18 @@ pub(crate) struct WalkArgs {
     /// (`tca up walk.toml`); the log and pictures are then central's and the modules'.
     #[arg(long, value_name = "ENDPOINT")]
     connect: Option<String>,
+    /// What the planners' computing costs in simulated time: "paper" (the 1990 system's
+    /// times, §7.2: Gait Planner 2 s, Leg Recovery Planner 12 s a step) or "measured" (this
+    /// machine's milliseconds).
+    #[arg(long, value_enum, default_value_t = ComputeModel::Paper)]
+    compute: ComputeModel,
     /// Print the summary as one JSON object on the last line of stdout.
     #[arg(long)]
     json: bool,
 }
 
 pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
-    let terrain = match (&args.terrain, args.course.as_str()) {
-        (Some(path), _) => TerrainChoice::File(path.clone()),
-        (None, "random") => TerrainChoice::Random(args.seed),
-        (None, n) => match n.parse::<u32>() {
-            Ok(n @ 1..=4) => TerrainChoice::Course(n),
-            _ => anyhow::bail!("--course must be 1, 2, 3, 4 or random (got {n:?})"),
-        },
-    };
+    let terrain = TerrainChoice::from_args(&args.course, args.terrain.as_deref(), args.seed)?;
     let options = WalkOptions {
         terrain,
         goal_y_m: args.goal,
@@ -66,6 +64,7 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         out: args.connect.is_none().then(|| args.out.clone()),
         step_pictures: args.pictures,
         connect: args.connect.clone(),
+        compute: args.compute,
     };
     let (tx, rx) = mpsc::unbounded_channel();
     let display = tokio::spawn(show_progress(rx));

@@ -22,7 +22,7 @@ use tca_messages::walking::{
 use tca_module::{Connector, Module, SendOptions};
 use tokio::sync::mpsc;
 
-pub use system::{SystemSetup, WALKING_MODULES, connect_all, connect_module};
+pub use system::{ComputeModel, SystemSetup, WALKING_MODULES, connect_all, connect_module};
 pub use terrain::{START_Y_M, TerrainChoice};
 
 /// The default goal along the rails, metres (the rails run from 0.5 to 10.5 m).
@@ -50,6 +50,9 @@ pub struct WalkOptions {
     pub step_pictures: bool,
     /// Walk with modules already running behind central at this zenoh endpoint.
     pub connect: Option<String>,
+    /// What the planners charge to simulated time (in-process only; modules running
+    /// elsewhere were started with their own).
+    pub compute: ComputeModel,
 }
 
 /// One leg of a walk (forward, or back).
@@ -133,6 +136,7 @@ pub async fn walk(
         anyhow::bail!("--goal must be a number of metres");
     }
     let mut setup = SystemSetup::new(options.terrain.clone(), options.seed)?;
+    setup.compute = options.compute;
     // In-process: central and every module here; else only the walker joins a running system.
     let (central, connector, _modules, log_path) = match &options.connect {
         Some(endpoint) => (None, Connector::zenoh(endpoint.clone()), Vec::new(), None),

@@ -10,7 +10,7 @@ use tca_gait_planner::GaitConfig;
 use tca_ism::IsmConfig;
 use tca_lrp::LrpConfig;
 use tca_ltm::LtmConfig;
-use tca_module::{Connector, Module, ModuleError};
+use tca_module::{ComputeTime, Connector, Module, ModuleError};
 use tca_pdm::PdmConfig;
 use tca_robot::{HeightField, LegParams};
 
@@ -32,6 +32,49 @@ pub struct SystemSetup {
     pub step_pictures: bool,
     /// The simulator's speed.
     pub speed: SpeedFactor,
+    /// What the planners charge to simulated time for their computing.
+    pub compute: ComputeModel,
+}
+
+/// What the planners charge to simulated time for their computing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ComputeModel {
+    /// The 1990 system's planning times (§7.2, Figure 18, exclusive of waiting): the Gait
+    /// Planner about 2 s a step, the Leg Recovery Planner about 12 s. Simulated walks then
+    /// take about as long as the report's, and planning the next step during the current
+    /// one saves about as much.
+    #[default]
+    Paper,
+    /// What the computing measures on this machine (milliseconds): the mechanism's motion
+    /// is then nearly all the time there is, and concurrent planning has little to save.
+    Measured,
+}
+
+impl ComputeModel {
+    /// Simulated seconds the Gait Planner charges per step under [`ComputeModel::Paper`].
+    pub const PAPER_GAIT_S: u64 = 2;
+    /// Simulated seconds the Leg Recovery Planner charges per leg move under
+    /// [`ComputeModel::Paper`].
+    pub const PAPER_LRP_S: u64 = 12;
+
+    fn gait(self) -> ComputeTime {
+        match self {
+            ComputeModel::Paper => {
+                ComputeTime::Modeled(std::time::Duration::from_secs(Self::PAPER_GAIT_S))
+            }
+            ComputeModel::Measured => ComputeTime::Measured,
+        }
+    }
+
+    fn lrp(self) -> ComputeTime {
+        match self {
+            ComputeModel::Paper => {
+                ComputeTime::Modeled(std::time::Duration::from_secs(Self::PAPER_LRP_S))
+            }
+            ComputeModel::Measured => ComputeTime::Measured,
+        }
+    }
 }
 
 impl SystemSetup {
@@ -44,6 +87,7 @@ impl SystemSetup {
             out: None,
             step_pictures: false,
             speed: SpeedFactor::AsFastAsPossible,
+            compute: ComputeModel::default(),
         })
     }
 
@@ -102,6 +146,7 @@ pub async fn connect_module(
             let config = LrpConfig {
                 picture_dir: setup.steps_dir(),
                 simulated_time: true,
+                compute_time: setup.compute.lrp(),
                 ..LrpConfig::default()
             };
             tca_lrp::connect(connector, config).await
@@ -110,6 +155,7 @@ pub async fn connect_module(
             let config = GaitConfig {
                 picture_dir: setup.steps_dir(),
                 simulated_time: true,
+                compute_time: setup.compute.gait(),
                 ..GaitConfig::default()
             };
             tca_gait_planner::connect(connector, config).await

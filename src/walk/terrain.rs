@@ -21,6 +21,23 @@ pub enum TerrainChoice {
 }
 
 impl TerrainChoice {
+    /// The terrain the command-line options name: `--terrain FILE` if given, else `--course`
+    /// (1 to 4, or "random" for a course from `seed`).
+    pub fn from_args(
+        course: &str,
+        file: Option<&std::path::Path>,
+        seed: u64,
+    ) -> anyhow::Result<Self> {
+        Ok(match (file, course) {
+            (Some(path), _) => TerrainChoice::File(path.to_path_buf()),
+            (None, "random") => TerrainChoice::Random(seed),
+            (None, n) => match n.parse::<u32>() {
+                Ok(n @ 1..=4) => TerrainChoice::Course(n),
+                _ => anyhow::bail!("--course must be 1, 2, 3, 4 or random (got {n:?})"),
+            },
+        })
+    }
+
     /// A short name for reports.
     pub fn describe(&self) -> String {
         match self {

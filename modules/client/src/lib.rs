@@ -34,10 +34,12 @@
 //! - [`connector`]: [`Connector`]: in-process or zenoh.
 //! - [`credentials`]: the identity/secret of the hello and the zenoh login, in code or from
 //!   `TCA_IDENTITY`/`TCA_SECRET` and `TCA_ZENOH_USER`/`TCA_ZENOH_PASSWORD`.
+//! - [`compute_time`]: [`ComputeTime`], what a handler charges to simulated time.
 //! - `handler`: type erasure of handlers.
 //! - [`error`]: [`ModuleError`] and [`HandlerError`].
 
 pub mod builder;
+pub mod compute_time;
 pub mod connector;
 pub mod context;
 pub mod credentials;
@@ -46,6 +48,7 @@ mod handler;
 pub mod module;
 
 pub use builder::ModuleBuilder;
+pub use compute_time::ComputeTime;
 pub use connector::Connector;
 pub use context::Context;
 pub use credentials::ZenohLogin;

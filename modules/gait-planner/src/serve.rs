@@ -21,7 +21,8 @@ use tca_messages::walking::{
     PlanStep, RecoverLeg, StepPlanned, WorldPoint,
 };
 use tca_module::{
-    Connector, ConstraintSpec, Context, HandlerError, Module, ModuleError, SendOptions, TaskRef,
+    ComputeTime, Connector, ConstraintSpec, Context, HandlerError, Module, ModuleError,
+    SendOptions, TaskRef,
 };
 use tca_robot::LegParams;
 
@@ -45,8 +46,11 @@ pub struct GaitConfig {
     pub params: GaitParams,
     /// Write a picture of every step's cost maps here (`step-<n>.png`).
     pub picture_dir: Option<PathBuf>,
-    /// Stamp messages with simulated time and charge the planning's wall-clock time to it.
+    /// Stamp messages with simulated time and charge each step's planning to it.
     pub simulated_time: bool,
+    /// What a step's planning charges to simulated time: the measured computing time, or a
+    /// modeled one (the 1990 Gait Planner took about 2 s a step, §7.2).
+    pub compute_time: ComputeTime,
     /// How many goals central may hand the module at once (more than 1 lets the next step
     /// be planned while the Walk goal is still being handled, for concurrent walking).
     pub capacity: u32,
@@ -63,6 +67,7 @@ impl Default for GaitConfig {
             params: GaitParams::default(),
             picture_dir: None,
             simulated_time: false,
+            compute_time: ComputeTime::Measured,
             capacity: 4,
             max_replans: 5,
         }
@@ -73,6 +78,7 @@ impl Default for GaitConfig {
 struct Shared {
     planner: Arc<GaitPlanner>,
     picture_dir: Option<PathBuf>,
+    compute_time: ComputeTime,
     walks: crate::walk::Walks,
 }
 
@@ -86,6 +92,7 @@ pub async fn connect(connector: &Connector, config: GaitConfig) -> Result<Module
     let shared = Shared {
         planner: Arc::new(planner),
         picture_dir: config.picture_dir.clone(),
+        compute_time: config.compute_time,
         walks: walks.clone(),
     };
     tracing::info!(module = %config.module_name, "gait planner starting");
@@ -183,7 +190,7 @@ impl Shared {
         .await
         .map_err(|e| HandlerError::new(format!("the planning task ended abnormally: {e}")))??;
         if ctx.simulated_time() {
-            ctx.spend(began.elapsed());
+            ctx.spend(self.compute_time.charged(began.elapsed()));
         }
         if let Some(walk) = ctx.origin()
             && self.walks.is_stale(walk, step.step)

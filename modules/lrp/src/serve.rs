@@ -17,7 +17,7 @@ use tca_messages::walking::{
     BodyPosition, ElbowSide, JointLegPosition, Joints, LegReachability, MapCell, MapGrid, MapKind,
     MapRegion, MoveFailed, MoveFailureKind, RecoverLeg, WorldPoint,
 };
-use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
+use tca_module::{ComputeTime, Connector, Context, HandlerError, Module, ModuleError};
 use tca_robot::{CarriagePose, JointPosition, LegKinematics, LegParams};
 
 use crate::params::LrpParams;
@@ -46,6 +46,10 @@ pub struct LrpConfig {
     /// Stamp messages with simulated time and charge the planning's wall-clock time to it
     /// (run with a simulated Controller).
     pub simulated_time: bool,
+    /// What planning a leg move (`recoverLeg`) charges to simulated time: the measured
+    /// computing time, or a modeled one (the 1990 LRP took about 12 s a step, §7.2).
+    /// Reachability queries always charge what they measure.
+    pub compute_time: ComputeTime,
 }
 
 impl Default for LrpConfig {
@@ -57,6 +61,7 @@ impl Default for LrpConfig {
             map_resolution_m: 0.05,
             picture_dir: None,
             simulated_time: false,
+            compute_time: ComputeTime::Measured,
         }
     }
 }
@@ -69,6 +74,7 @@ struct Shared {
     map_resolution_m: f64,
     picture_dir: Option<PathBuf>,
     pictures: Arc<AtomicU64>,
+    compute_time: ComputeTime,
 }
 
 /// Connects the Leg Recovery Planner to central under `config.module_name` and serves
@@ -89,6 +95,7 @@ pub async fn connect(connector: &Connector, config: LrpConfig) -> Result<Module,
         map_resolution_m: config.map_resolution_m,
         picture_dir: config.picture_dir.clone(),
         pictures: Arc::new(AtomicU64::new(0)),
+        compute_time: config.compute_time,
     };
     tracing::info!(module = %config.module_name, "leg recovery planner starting");
     Module::builder(config.module_name.clone())
@@ -172,7 +179,7 @@ impl Shared {
         .await
         .map_err(|e| HandlerError::new(format!("the planning task ended abnormally: {e}")))?;
         if ctx.simulated_time() {
-            ctx.spend(began.elapsed());
+            ctx.spend(self.compute_time.charged(began.elapsed()));
         }
         match planned {
             Ok((cs, plan)) => {
