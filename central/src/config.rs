@@ -67,10 +67,12 @@ impl Default for CentralConfig {
             max_waiting: 1024,
             max_wait: Duration::from_secs(60),
             default_capacity: 1,
-            max_inbox_frames: 1024,
-            max_inbox_bytes: 32 << 20,
-            max_queued_messages: 4096,
-            max_queued_bytes: 64 << 20,
+            // Generous: a legitimate burst (a benchmark sending 100,000 goals in a loop) fits;
+            // a module that floods without end is stopped within ~100 MB of central's memory.
+            max_inbox_frames: 1 << 18,
+            max_inbox_bytes: 64 << 20,
+            max_queued_messages: 1 << 18,
+            max_queued_bytes: 256 << 20,
             policy: None,
         }
     }

@@ -619,3 +619,85 @@ fn an_exception_outside_a_task_is_refused() {
         "{err}"
     );
 }
+
+#[test]
+fn a_sender_over_its_queue_limit_is_refused_while_others_are_served() {
+    let mut h = Harness::with(CentralConfig {
+        max_queued_messages: 2,
+        max_queued_bytes: 1 << 20,
+        ..CentralConfig::default()
+    });
+    h.connect(1, "ctl", 1);
+    h.register::<Target>(1, "ctl", "move", Class::Command, false);
+    h.connect(2, "flood", 1);
+    h.connect(3, "calm", 1);
+    // The first command runs at once; the next two wait for capacity (queued, charged to the
+    // flooder); the fourth is over the limit.
+    let mut cmds = Vec::new();
+    for i in 0..4 {
+        let c = h.envelope(2, "flood", Class::Command, "move", target(f64::from(i)));
+        let sent = h.send(2, &c);
+        cmds.push((c, sent));
+    }
+    assert_eq!(cmds[0].1.len(), 1, "delivered to the handler");
+    assert!(cmds[1].1.is_empty() && cmds[2].1.is_empty(), "queued");
+    let err = error_of(&cmds[3].1[0].1);
+    match &err {
+        RouteError::OverLimit {
+            module, setting, ..
+        } => assert_eq!(
+            (module.as_str(), setting.as_str()),
+            ("flood", "max_queued_messages")
+        ),
+        other => panic!("expected OverLimit, got {other}"),
+    }
+    assert!(err.to_string().contains("over its limit of 2"), "{err}");
+    assert_eq!(
+        h.central
+            .queued_by(&ModuleName::new("flood").unwrap())
+            .messages,
+        2
+    );
+    // Another sender is not affected by the flooder's limit.
+    let calm = h.envelope(3, "calm", Class::Command, "move", target(9.0));
+    assert!(h.send(3, &calm).is_empty(), "queued, not refused");
+    // As the handler finishes, queued commands are delivered and the flooder's count falls.
+    let first = cmds[0].1[0].1.clone();
+    let sent = h.done(1, "ctl", &first, true);
+    assert!(
+        sent.iter()
+            .any(|(l, e)| *l == 1 && e.class == Class::Command)
+    );
+    assert_eq!(
+        h.central
+            .queued_by(&ModuleName::new("flood").unwrap())
+            .messages,
+        1
+    );
+    assert_eq!(h.central.recount_queued(), h.central.queued_totals());
+    let again = h.envelope(2, "flood", Class::Command, "move", target(5.0));
+    assert!(h.send(2, &again).is_empty(), "room again");
+}
+
+#[test]
+fn a_full_inbox_is_answered_with_an_error_naming_the_limit() {
+    let mut h = Harness::with(CentralConfig {
+        max_inbox_frames: 8,
+        ..CentralConfig::default()
+    });
+    h.connect(1, "ctl", 1);
+    h.register::<Target>(1, "ctl", "move", Class::Command, false);
+    h.connect(2, "flood", 1);
+    let c = h.envelope(2, "flood", Class::Command, "move", target(1.0));
+    let used = InboxUse {
+        frames: 8,
+        bytes: 400,
+    };
+    let sent = h.step(Event::InboxFull(2, Bytes::from(encode(&c).unwrap()), used));
+    assert_eq!(sent.len(), 1, "only the error, nothing routed");
+    assert_eq!(sent[0].0, 2);
+    assert_eq!(sent[0].1.correlation, Some(c.id));
+    let err = error_of(&sent[0].1);
+    assert!(err.to_string().contains("max_inbox_frames"), "{err}");
+    assert_eq!(h.central.counters().over_limit, 1);
+}
