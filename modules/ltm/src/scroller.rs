@@ -31,6 +31,9 @@ struct Tile {
     dirty: bool,
 }
 
+/// An inclusive rectangle of lattice cells: `((i_min, j_min), (i_max, j_max))`.
+pub type CellBounds = ((i64, i64), (i64, i64));
+
 /// What a scroll did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct ScrollReport {
@@ -297,9 +300,9 @@ impl TileStore {
     /// The lattice cells the map knows anything about (known or occluded), in memory or on
     /// disk, as the smallest index rectangle `((i_min, j_min), (i_max, j_max))` holding them
     /// all; `None` while the map is empty. Reads every tile on disk that is not in memory.
-    pub fn mapped_cells(&self) -> Result<Option<((i64, i64), (i64, i64))>> {
+    pub fn mapped_cells(&self) -> Result<Option<CellBounds>> {
         let s = self.side as i64;
-        let mut bounds: Option<((i64, i64), (i64, i64))> = None;
+        let mut bounds: Option<CellBounds> = None;
         let mut include = |key: TileKey, cells: &[Cell]| {
             for (k, cell) in cells.iter().enumerate() {
                 if cell.state == CellState::Unknown {
