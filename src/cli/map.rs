@@ -15,11 +15,17 @@ use tca_module::Connector;
 use super::ConnectArgs;
 
 #[derive(Debug, Args)]
-#[command(after_help = "Examples:
+#[command(
+    after_help = "Without --log the map comes from the running system behind central at \
+--connect (default tcp/127.0.0.1:7447, as `tca up walk.toml` starts it). Without --region or \
+--polygon the picture shows the whole mapped area.
+
+Examples:
   tca map --log out/walk/traffic.mcap -o map.png
   tca map --log out/walk/traffic.mcap --kind footfall --region 2,1,6,5 --overlay-footfalls -o f.png
   tca map --log out/walk/traffic.mcap --at 120 -o two-minutes-in.png
-  tca map --connect tcp/127.0.0.1:7447 --kind slope --polygon \"2,2 5,2 5,6\" -o slope.png")]
+  tca map --connect tcp/127.0.0.1:7447 --kind slope --polygon \"2,2 5,2 5,6\" -o slope.png"
+)]
 pub(crate) struct MapArgs {
     #[command(flatten)]
     connect: ConnectArgs,
