@@ -701,3 +701,99 @@ fn a_full_inbox_is_answered_with_an_error_naming_the_limit() {
     assert!(err.to_string().contains("max_inbox_frames"), "{err}");
     assert_eq!(h.central.counters().over_limit, 1);
 }
+
+#[test]
+fn the_policy_refuses_strangers_and_sends_outside_the_rules_without_routing_them() {
+    let text = format!(
+        "[[identity]]\nname = \"gait\"\nsecret_sha3 = \"{}\"\nregister = []\n\
+         send = [\"bodyMove\", \"tca.monitor\"]\n\
+         [[identity]]\nname = \"ctl\"\nsecret_sha3 = \"{}\"\nregister = [\"bodyMove\", \"status\"]\n",
+        crate::policy::hash_secret("gait", "g"),
+        crate::policy::hash_secret("ctl", "c"),
+    );
+    let policy = crate::Policy::parse(std::path::Path::new("p.toml"), &text).unwrap();
+    let mut h = Harness::with(CentralConfig {
+        policy: Some(std::sync::Arc::new(policy)),
+        ..CentralConfig::default()
+    });
+    let auth_hello = |h: &mut Harness, link: LinkId, module: &str, id: &str, secret: &str| {
+        h.step(Event::Opened(link));
+        let hello = control::AuthHello {
+            hello: Hello {
+                module: ModuleName::new(module).unwrap(),
+                capacity: 1,
+                pid: 1,
+                host: "test".into(),
+            },
+            credentials: control::Credentials {
+                identity: id.into(),
+                secret: secret.into(),
+            },
+        };
+        let data = encode_data(&hello).unwrap();
+        let mut env = h.envelope(link, module, Class::Control, names::HELLO_AUTH, data);
+        env.id = MessageId::new(0, 0);
+        h.send(link, &env)
+    };
+    // A plain hello, and a wrong secret, are refused.
+    let sent = h.connect(9, "gait", 1);
+    assert!(
+        error_of(&sent[0].1)
+            .to_string()
+            .contains("requires credentials")
+    );
+    let sent = auth_hello(&mut h, 8, "gait", "gait", "nope");
+    assert!(error_of(&sent[0].1).to_string().contains("secret is wrong"));
+    assert!(h.central.connected_modules().is_empty());
+    // The right ones are welcomed.
+    let sent = auth_hello(&mut h, 1, "ctl", "ctl", "c");
+    assert_eq!(sent[0].1.class, Class::Control, "welcome");
+    auth_hello(&mut h, 2, "gait", "gait", "g");
+    let outcome = h.register::<Target>(1, "ctl", "bodyMove", Class::Command, false);
+    assert_eq!(outcome.accepted.len(), 1);
+    let outcome = h.register::<Target>(1, "ctl", "walk", Class::Goal, false);
+    assert!(
+        outcome.refused[0].1.contains("may not register \"walk\""),
+        "{outcome:?}"
+    );
+    h.register::<Target>(1, "ctl", "status", Class::Query, false);
+    // gait may send bodyMove...
+    let ok = h.envelope(2, "gait", Class::Command, "bodyMove", target(1.0));
+    let sent = h.send(2, &ok);
+    assert_eq!(sent[0].0, 1, "delivered to the controller");
+    // ...but not the query `status`, directly or as a monitor's condition.
+    let q = h.envelope(2, "gait", Class::Query, "status", target(1.0));
+    let sent = h.send(2, &q);
+    assert_eq!(sent.len(), 1, "only the error; nothing routed");
+    match error_of(&sent[0].1) {
+        RouteError::NotPermitted { name, rule, .. } => {
+            assert_eq!(name, "status");
+            assert!(rule.contains("identity \"gait\" send"), "{rule}");
+        }
+        other => panic!("expected NotPermitted, got {other}"),
+    }
+    let monitor = control::Monitor {
+        node: NodeId(1),
+        query: MessageName::new("status").unwrap(),
+        query_data: target(1.0),
+        period_ms: None,
+        action: control::MonitorAction::Raise {
+            name: MessageName::new("moveFailed").unwrap(),
+            data: Vec::new(),
+        },
+    };
+    let m = h.envelope(
+        2,
+        "gait",
+        Class::Control,
+        names::MONITOR,
+        encode_data(&monitor).unwrap(),
+    );
+    let sent = h.send(2, &m);
+    assert_eq!(sent.len(), 1);
+    assert!(matches!(
+        error_of(&sent[0].1),
+        RouteError::NotPermitted { .. }
+    ));
+    assert_eq!(h.central.counters().not_permitted, 3);
+}
