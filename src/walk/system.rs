@@ -138,6 +138,7 @@ pub async fn connect_module(
         "pdm" => {
             let config = PdmConfig {
                 output_dir: setup.out.clone(),
+                simulated_time: true,
                 ..PdmConfig::default()
             };
             tca_pdm::connect(connector, config).await

@@ -19,6 +19,9 @@ pub struct PdmConfig {
     /// Relative output paths are taken relative to this directory (`None`: the process's
     /// working directory).
     pub output_dir: Option<PathBuf>,
+    /// Stamp messages with simulated time (run with a simulated Controller) and charge the
+    /// drawing's measured time to it.
+    pub simulated_time: bool,
 }
 
 impl PdmConfig {
@@ -35,14 +38,20 @@ impl PdmConfig {
 /// Connects the PDM module (`"pdm"`) and handles `renderMap`.
 pub async fn connect(connector: &Connector, config: PdmConfig) -> Result<Module, ModuleError> {
     let config = Arc::new(config);
+    let simulated_time = config.simulated_time;
     Module::builder("pdm")
+        .simulated_time(simulated_time)
         .handle(move |ctx, request: RenderMap| {
             let config = config.clone();
             async move {
                 let path = config.resolve(&request.path);
+                let began = std::time::Instant::now();
                 render_map(ctx.module(), &request, &config.render, &path)
                     .await
                     .map_err(HandlerError::from)?;
+                if simulated_time {
+                    ctx.spend(began.elapsed());
+                }
                 tracing::info!(path = %path.display(), kind = ?request.region.kind, "map drawn");
                 Ok(())
             }
