@@ -23,7 +23,7 @@
 use std::collections::HashMap;
 use std::time::Duration;
 
-use tca_messages::control::{Hello, Registration, TaskOutcome, names};
+use tca_messages::control::{AuthHello, Hello, Registration, TaskOutcome, names};
 use tca_messages::{Class, Envelope, Failure, MessageId, ModuleName, decode_data};
 
 use crate::reader::LogFile;
@@ -251,9 +251,17 @@ pub fn module_script(log: &LogFile, module: &str) -> Option<ModuleScript> {
                         }
                     }
                     Direction::In => {
-                        if env.name.as_str() == names::HELLO {
-                            if let Ok(hello) = decode_data::<Hello>(&env.data) {
-                                script.capacity = hello.capacity.max(1);
+                        let hello = match env.name.as_str() {
+                            names::HELLO => Some(decode_data::<Hello>(&env.data).ok()),
+                            // Credentials are redacted from the log; the hello is what counts.
+                            names::HELLO_AUTH => {
+                                Some(decode_data::<AuthHello>(&env.data).ok().map(|a| a.hello))
+                            }
+                            _ => None,
+                        };
+                        if let Some(hello) = hello {
+                            if let Some(h) = hello {
+                                script.capacity = h.capacity.max(1);
                             }
                             continue;
                         }

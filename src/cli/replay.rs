@@ -37,9 +37,10 @@ pub(crate) struct ReplayArgs {
     /// Keep the replay's own traffic log in DIR/traffic.mcap.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Give up on a replayed goal after this many wall-clock seconds.
-    #[arg(long, value_name = "SECONDS", default_value_t = 300)]
-    timeout: u64,
+    /// Give up on a replayed goal after this many wall-clock seconds (default: 20 times its
+    /// recorded wall time, at least 30 s).
+    #[arg(long, value_name = "SECONDS")]
+    timeout: Option<u64>,
     /// Print the report as one JSON object on the last line of stdout.
     #[arg(long)]
     json: bool,
@@ -67,7 +68,7 @@ pub(crate) async fn run(args: ReplayArgs) -> anyhow::Result<ExitCode> {
         terrain,
         seed: args.seed,
         out: args.out,
-        goal_timeout: Duration::from_secs(args.timeout.max(1)),
+        goal_timeout: args.timeout.map(|t| Duration::from_secs(t.max(1))),
     };
     let report = match replay(&options).await {
         Ok(r) => r,

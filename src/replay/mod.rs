@@ -14,7 +14,8 @@
 //! the LTM Manager, PDM, Leg Recovery Planner and Gait Planner, set up as `tca walk` sets them
 //! up) and one stand-in for each module named in `--as`. A stand-in registers the recorded
 //! module's messages with their recorded formats and answers each message with what the
-//! recorded module did for the same (asker, message name), in recorded order: its reply, or
+//! recorded module did for the same (asker, message name), in recorded order (see
+//! [`stand_in`] for the details): its reply, or
 //! the success or failure of a goal or command, the exceptions it raised there (a
 //! `moveFailed` in a `legMove`'s context) and whatever else it sent while handling, each after
 //! the recorded simulated time. A driver named like the recorded walker then sends the
@@ -32,7 +33,13 @@
 //! divergence on purpose. Modules named live that need the terrain (the Controller, the ISM)
 //! need `--course`/`--terrain` and `--seed` as recorded. `--out DIR` keeps the replay's own
 //! traffic log (`DIR/traffic.mcap`); `--json` prints the report as one JSON object on the last
-//! line.
+//! line; `--timeout SECONDS` bounds each replayed goal (default: 20 times its recorded wall
+//! time, at least 30 s), since a replay that has drifted from the record can wait for answers
+//! that never come.
+//!
+//! Replays are exact for sequential walks. Concurrent walks can diverge by themselves: when
+//! two `mapRegion` refreshes overlap in the LTM Manager, which merged image a query sees
+//! depends on thread timing.
 //!
 //! **Exit status** (like `diff`): 0 when every message matches and the goals end as recorded,
 //! 1 on a divergence, 2 when the log cannot be replayed (unreadable or cut short before the
@@ -58,8 +65,12 @@ use crate::walk::{SystemSetup, TerrainChoice, WALKING_MODULES, connect_module};
 /// The root goal whose sender is the walker the driver stands in for.
 pub const WALK_GOAL: &str = "walk";
 
-/// Default wall-clock limit of one replayed goal.
-pub const DEFAULT_GOAL_TIMEOUT: Duration = Duration::from_secs(300);
+/// Least wall-clock limit of one replayed goal, unless given.
+pub const MIN_GOAL_TIMEOUT: Duration = Duration::from_secs(30);
+
+/// Unless given, a replayed goal may take this many times its recorded wall-clock time (a
+/// replay that has drifted from the record can wait on answers that never come).
+pub const GOAL_TIMEOUT_FACTOR: u32 = 20;
 
 /// How many divergences a report lists.
 pub const LISTED_DIVERGENCES: usize = 20;
@@ -79,8 +90,9 @@ pub struct ReplayOptions {
     pub seed: u64,
     /// Keep the replay's traffic log in this directory.
     pub out: Option<PathBuf>,
-    /// Wall-clock limit of each replayed goal.
-    pub goal_timeout: Duration,
+    /// Wall-clock limit of each replayed goal; `None`: [`GOAL_TIMEOUT_FACTOR`] times its
+    /// recorded duration, at least [`MIN_GOAL_TIMEOUT`].
+    pub goal_timeout: Option<Duration>,
 }
 
 /// One replayed root goal.
@@ -423,10 +435,17 @@ pub async fn replay(options: &ReplayOptions) -> anyhow::Result<ReplayReport> {
                 ..SendOptions::default()
             },
         )?;
-        let live = match tokio::time::timeout(options.goal_timeout, task.outcome()).await {
+        let limit = options.goal_timeout.unwrap_or_else(|| {
+            let recorded_ns = root.outcome.as_ref().map_or(0, |(_, end)| {
+                let at = |i: usize| recorded.log.records.get(i).map_or(0, |r| r.at_ns);
+                at(*end).saturating_sub(at(root.position))
+            });
+            (Duration::from_nanos(recorded_ns) * GOAL_TIMEOUT_FACTOR).max(MIN_GOAL_TIMEOUT)
+        });
+        let live = match tokio::time::timeout(limit, task.outcome()).await {
             Ok(Ok(o)) => describe(Some(&o)),
             Ok(Err(e)) => format!("lost ({e})"),
-            Err(_) => format!("did not end within {:?}", options.goal_timeout),
+            Err(_) => format!("did not end within {limit:?}"),
         };
         let ended = !live.starts_with("did not end") && !live.starts_with("lost");
         goals.push(GoalReplay {

@@ -1,6 +1,7 @@
 //! A stand-in: a module played back from its script ([`tca_logs::script`]). It registers the
 //! recorded module's messages with their recorded formats and answers each delivery with what
-//! the recorded module did for the same (asker, message name), in recorded order: the
+//! the recorded module did for the same (asker, message name), in recorded order (preferring,
+//! among the next few, one whose recorded data is the same as the delivery's): the
 //! messages it sent while handling (queries, goals, commands, informs, exceptions, task-tree
 //! control), then its reply, success or failure, each after the recorded own (simulated)
 //! time.
@@ -87,9 +88,9 @@ pub async fn connect(connector: &Connector, script: ModuleScript) -> Result<Stan
     for registration in &script.registrations {
         let (script, state) = (script.clone(), state.clone());
         let name = registration.name.to_string();
-        builder = builder.handle_raw(registration.clone(), move |ctx, _data| {
+        builder = builder.handle_raw(registration.clone(), move |ctx, data| {
             let (script, state, name) = (script.clone(), state.clone(), name.clone());
-            async move { play(ctx, &name, &script, &state).await }
+            async move { play(ctx, &name, &data, &script, &state).await }
         });
     }
     let module = builder.connect(connector).await?;
@@ -100,10 +101,27 @@ pub async fn connect(connector: &Connector, script: ModuleScript) -> Result<Stan
     })
 }
 
+/// How far down its queue a delivery looks for a recorded one with the same data.
+pub const LOOKAHEAD: usize = 16;
+
+/// The handling to play for a delivery with `data`: the first of the next [`LOOKAHEAD`] queued
+/// whose recorded data is the same (deliveries may come in another order than recorded, e.g.
+/// steps planned concurrently), else the next in recorded order.
+fn take_next(queue: &mut VecDeque<usize>, script: &ModuleScript, data: &[u8]) -> Option<usize> {
+    let same = queue.iter().take(LOOKAHEAD).position(|&i| {
+        script
+            .handlings
+            .get(i)
+            .is_some_and(|h| h.delivery.data == data)
+    });
+    queue.remove(same.unwrap_or(0))
+}
+
 /// Plays the next recorded handling of (asker, `name`).
 async fn play(
     ctx: Context,
     name: &str,
+    data: &[u8],
     script: &ModuleScript,
     state: &Mutex<State>,
 ) -> Result<Vec<u8>, HandlerError> {
@@ -113,7 +131,7 @@ async fn play(
         let next = s
             .queues
             .get_mut(&(asker.clone(), name.to_owned()))
-            .and_then(VecDeque::pop_front);
+            .and_then(|queue| take_next(queue, script, data));
         if next.is_none() {
             s.unscripted += 1;
         }
@@ -142,6 +160,8 @@ async fn play(
         }
     }
     for action in &handling.actions {
+        // Where a real handler could be cancelled (its node killed), so can this one.
+        tokio::task::yield_now().await;
         ctx.spend(action.spend);
         perform(&ctx, action, script, state).await;
     }
