@@ -690,9 +690,9 @@ fn fuzz_long_run() {
 /// with overflow checks (debug and test builds), a silent wrap in release builds, where the
 /// reader goes on reading the rest of the file as the chunk's records. The fix belongs in
 /// tca-logs' reader (check each chunk's inner record lengths against the chunk before handing
-/// it to mcap, or read chunks itself) or in mcap; un-ignore this test once it is fixed.
+/// it to mcap, or read chunks itself) or in mcap. Fixed: the reader turns the panic into a
+/// corrupt-file error.
 #[test]
-#[ignore = "known finding in tca-logs/mcap 0.26: chunk inner record overrun panics in debug builds"]
 fn known_finding_mcap_chunk_record_overrun() {
     let mut bytes = b"\x89MCAP0\r\n".to_vec();
     let record = |bytes: &mut Vec<u8>, opcode: u8, body: &[u8]| {

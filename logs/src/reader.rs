@@ -49,6 +49,20 @@ impl LogFile {
 
     /// Parses log bytes (see [`LogFile::open`]).
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self> {
+        // The mcap crate can trip an arithmetic overflow check on some malformed chunks (a
+        // record claiming more bytes than its chunk holds; found by fuzzing): a panic there
+        // is a corrupt file, not a crash.
+        std::panic::catch_unwind(|| Self::parse_unguarded(path, bytes)).unwrap_or_else(|_| {
+            Err(LogError::Corrupt {
+                path: path.to_owned(),
+                reason: "a record inside a chunk claims more bytes than the chunk holds; the \
+                         file is damaged (a log written by `tca central --log` never has this)"
+                    .into(),
+            })
+        })
+    }
+
+    fn parse_unguarded(path: &Path, bytes: &[u8]) -> Result<Self> {
         let corrupt = |reason: String| LogError::Corrupt {
             path: path.to_owned(),
             reason,
