@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use clap::Args;
 use tca::replay::{ReplayOptions, replay};
-use tca::walk::TerrainChoice;
+use tca::walk::{ComputeModel, TerrainChoice};
 
 #[derive(Debug, Args)]
 pub(crate) struct ReplayArgs {
@@ -34,6 +34,10 @@ pub(crate) struct ReplayArgs {
     /// The recorded seed (random course and scanner noise), for a live Controller or ISM.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// What the live planners' computing costs in simulated time, as in `tca walk --compute`
+    /// (only the stamps depend on it, not the data compared).
+    #[arg(long, value_enum, default_value_t = ComputeModel::Paper)]
+    compute: ComputeModel,
     /// Keep the replay's own traffic log in DIR/traffic.mcap.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -67,6 +71,7 @@ pub(crate) async fn run(args: ReplayArgs) -> anyhow::Result<ExitCode> {
         gait_params: args.gait_params,
         terrain,
         seed: args.seed,
+        compute: args.compute,
         out: args.out,
         goal_timeout: args.timeout.map(|t| Duration::from_secs(t.max(1))),
     };

@@ -60,7 +60,7 @@ use tca_messages::control::TaskOutcome;
 use tca_messages::{Class, SendOptions};
 use tca_module::{Connector, Module};
 
-use crate::walk::{SystemSetup, TerrainChoice, WALKING_MODULES, connect_module};
+use crate::walk::{ComputeModel, SystemSetup, TerrainChoice, WALKING_MODULES, connect_module};
 
 /// The root goal whose sender is the walker the driver stands in for.
 pub const WALK_GOAL: &str = "walk";
@@ -88,6 +88,9 @@ pub struct ReplayOptions {
     pub terrain: Option<TerrainChoice>,
     /// The recorded scanner-noise seed, for a live ISM.
     pub seed: u64,
+    /// What the live planners' computing costs in simulated time (as recorded: only the
+    /// stamps depend on it, never the data compared).
+    pub compute: ComputeModel,
     /// Keep the replay's traffic log in this directory.
     pub out: Option<PathBuf>,
     /// Wall-clock limit of each replayed goal; `None`: [`GOAL_TIMEOUT_FACTOR`] times its
@@ -104,6 +107,10 @@ pub struct GoalReplay {
     pub recorded: String,
     /// How it ended in the replay.
     pub live: String,
+    /// When it ended in the record, simulated seconds (if the walk ran on simulated time).
+    pub recorded_sim_s: Option<f64>,
+    /// When it ended in the replay, simulated seconds.
+    pub live_sim_s: Option<f64>,
 }
 
 /// What the replay found.
@@ -148,9 +155,14 @@ impl ReplayReport {
             list(&self.live)
         );
         for g in &self.goals {
+            let at = |t: Option<f64>| t.map(|t| format!(" at {t:.1} s")).unwrap_or_default();
             s += &format!(
-                "{} goal: recorded {}, replay {}\n",
-                g.name, g.recorded, g.live
+                "{} goal: recorded {}{}, replay {}{} (simulated time)\n",
+                g.name,
+                g.recorded,
+                at(g.recorded_sim_s),
+                g.live,
+                at(g.live_sim_s)
             );
         }
         for (m, n) in self.unscripted.iter().filter(|(_, n)| **n > 0) {
@@ -275,6 +287,17 @@ fn walk_roots(log: &LogFile, walker: &str) -> Vec<RootTask> {
     roots
 }
 
+/// When a root task ended, simulated seconds: the stamp of central's notice, if it is
+/// simulated time.
+fn ended_at_s(log: &LogFile, root: &RootTask) -> Option<f64> {
+    let (_, position) = root.outcome.as_ref()?;
+    let tca_logs::RecordKind::Frame(f) = &log.records.get(*position)?.kind else {
+        return None;
+    };
+    let t = LogFile::envelope(f).ok()?.timestamp_ns;
+    (t < tca_logs::script::SIMULATED_TIME_BELOW_NS).then(|| t as f64 / 1e9)
+}
+
 /// The window of a log the replay covers: from the first root goal to the end of the last.
 fn window(roots: &[RootTask], len: usize) -> std::ops::Range<usize> {
     let start = roots.first().map_or(len, |r| r.position);
@@ -311,9 +334,16 @@ async fn connect_live(
     let module = match (name, gait_params) {
         ("gait", Some(params)) => {
             // As `connect_module` sets it up, with other parameters.
+            let compute_time = match setup.compute {
+                ComputeModel::Paper => tca_module::ComputeTime::Modeled(Duration::from_secs(
+                    ComputeModel::PAPER_GAIT_S,
+                )),
+                ComputeModel::Measured => tca_module::ComputeTime::Measured,
+            };
             let config = tca_gait_planner::GaitConfig {
                 params: *params,
                 simulated_time: true,
+                compute_time,
                 ..tca_gait_planner::GaitConfig::default()
             };
             tca_gait_planner::connect(connector, config).await
@@ -392,6 +422,7 @@ pub async fn replay(options: &ReplayOptions) -> anyhow::Result<ReplayReport> {
     // Whatever a live module draws goes next to the replay's log, never over the record's.
     let mut setup = setup;
     setup.out = Some(dir.clone());
+    setup.compute = options.compute;
     let central = tca_central::start(StartOptions {
         log: Some(log_path.clone()),
         ..StartOptions::default()
@@ -452,6 +483,8 @@ pub async fn replay(options: &ReplayOptions) -> anyhow::Result<ReplayReport> {
             name: env.name.to_string(),
             recorded: describe(recorded_outcome),
             live,
+            recorded_sim_s: ended_at_s(&recorded.log, root),
+            live_sim_s: None,
         });
         if !ended {
             break;
@@ -489,6 +522,9 @@ pub async fn replay(options: &ReplayOptions) -> anyhow::Result<ReplayReport> {
     }
     let live_roots = walk_roots(&live_log, &recorded.walker);
     let live_window = window(&live_roots, live_log.records.len());
+    for (goal, root) in goals.iter_mut().zip(&live_roots) {
+        goal.live_sim_s = ended_at_s(&live_log, root);
+    }
     let comparison = tca_logs::compare(
         Side {
             log: &recorded.log,
