@@ -16,7 +16,7 @@
 //! - [`stats`]: the Figure 18 breakdown (computing, waiting, idle per module), latencies.
 //! - [`export`]: a JSON-encoded copy of a log for Foxglove Studio.
 //! - [`script`]: what one module did in a recorded run, as a script to play it back.
-//! - [`compare`]: comparing what modules sent in two runs, field by field (`tca log replay`).
+//! - [`compare`](mod@compare): comparing what modules sent in two runs, field by field (`tca log replay`).
 //! - [`error`][]: [`LogError`].
 
 pub mod compare;

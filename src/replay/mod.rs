@@ -25,7 +25,7 @@
 //! Afterwards every message the live modules sent during the replayed goals (queries, goals,
 //! commands, informs, exceptions, replies, successes and failures) is compared with the record,
 //! per (sender, message name) in order, field by field through the registered data formats
-//! (see [`tca_logs::compare`] for what is and is not compared). It prints `N messages
+//! (see [`tca_logs::compare`](mod@tca_logs::compare) for what is and is not compared). It prints `N messages
 //! compared, all match`, or the first divergence, e.g.
 //! `first divergence: gait -> recoverLeg #3, field footfall.x_m: recorded 1.55, live 1.65`,
 //! and how many more there are. `--gait-params FILE.toml` runs the Gait Planner with other
