@@ -24,18 +24,11 @@ pub async fn connect_with_map(
 ) -> Result<Module, ModuleError> {
     let simulated_time = map.config().simulated_time;
     let map = Arc::new(Mutex::new(map));
-    // One request at a time from the image it takes to the answer: two overlapping refreshes
-    // must not interleave their images and queries (which merged images an answer saw would
-    // otherwise depend on thread timing, and a replayed walk could differ from its record).
-    let turn = Arc::new(tokio::sync::Mutex::new(()));
     Module::builder("ltm")
         .simulated_time(simulated_time)
         .handle(move |ctx, request: MapRegion| {
-            let (map, turn) = (map.clone(), turn.clone());
-            async move {
-                let _turn = turn.lock().await;
-                map_region(&ctx, map, request).await
-            }
+            let map = map.clone();
+            async move { map_region(&ctx, map, request).await }
         })
         .connect(connector)
         .await
