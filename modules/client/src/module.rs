@@ -257,15 +257,19 @@ impl Module {
         }
         let notify = options.notify;
         let envelope = self.envelope(M::CLASS, M::NAME, encode_data(message)?, Some(options))?;
+        self.transmit_task(&envelope, notify)
+    }
+
+    /// Sends a task's envelope; with `notify`, watches for its outcome (the watch is dropped
+    /// again if the send fails).
+    fn transmit_task(&self, envelope: &Envelope, notify: bool) -> Result<Task> {
         let id = envelope.id;
-        let outcome = if notify {
+        let outcome = notify.then(|| {
             let (tx, rx) = oneshot::channel();
             lock(&self.shared.watchers).insert(id, tx);
-            Some(rx)
-        } else {
-            None
-        };
-        if let Err(e) = self.transmit(&envelope) {
+            rx
+        });
+        if let Err(e) = self.transmit(envelope) {
             lock(&self.shared.watchers).remove(&id);
             return Err(e);
         }
@@ -342,19 +346,7 @@ impl Module {
         }
         let notify = options.notify && class.is_task();
         let envelope = self.envelope(class, name, data, Some(options))?;
-        let id = envelope.id;
-        let outcome = if notify {
-            let (tx, rx) = oneshot::channel();
-            lock(&self.shared.watchers).insert(id, tx);
-            Some(rx)
-        } else {
-            None
-        };
-        if let Err(e) = self.transmit(&envelope) {
-            lock(&self.shared.watchers).remove(&id);
-            return Err(e);
-        }
-        Ok(Task { id, outcome })
+        self.transmit_task(&envelope, notify)
     }
 
     /// [`Module::on_exception`] for an exception given by name (tools that do not know its
