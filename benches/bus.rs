@@ -15,7 +15,7 @@ use tca::builtin::echo::{self, Ping, PingGoal};
 use tca_central::{Action, Central, CentralConfig, Event, StartOptions};
 use tca_messages::control::{Hello, Register, names};
 use tca_messages::*;
-use tca_module::{Connector, Module};
+use tca_module::{Connector, Module, ModuleError};
 use tokio::runtime::Runtime;
 use tokio::sync::{Notify, mpsc};
 
@@ -171,7 +171,10 @@ fn routed_query(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
 
 fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
     // A sink module counting goals, and a sender.
+    // The sink wakes the timing loop once, when the count reaches the sample's target (a wake
+    // per goal would time tokio's Notify as much as central).
     let count = Arc::new(AtomicU64::new(0));
+    let target = Arc::new(AtomicU64::new(u64::MAX));
     let notify = Arc::new(Notify::new());
     let (central, sender, _sink, _dir) = rt.block_on(async {
         let dir = tempfile::tempdir().unwrap();
@@ -192,17 +195,14 @@ fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
         } else {
             Connector::InProcess(central.handle())
         };
-        let (count, notify) = (count.clone(), notify.clone());
+        let (count, target, notify) = (count.clone(), target.clone(), notify.clone());
         let sink = Module::builder("sink")
             .capacity(4096)
             .handle(move |_ctx, _g: PingGoal| {
-                let count = count.clone();
-                let notify = notify.clone();
-                async move {
-                    count.fetch_add(1, Ordering::Relaxed);
+                if count.fetch_add(1, Ordering::Relaxed) + 1 >= target.load(Ordering::Relaxed) {
                     notify.notify_one();
-                    Ok(())
                 }
+                async { Ok(()) }
             })
             .connect(&connector)
             .await
@@ -222,14 +222,25 @@ fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
         b.to_async(rt).iter_custom(|iters| {
             let sender = sender.clone();
             let count = count.clone();
+            let target = target.clone();
             let notify = notify.clone();
             async move {
-                let target = count.load(Ordering::Relaxed) + iters;
+                let goal_count = count.load(Ordering::Relaxed) + iters;
+                target.store(goal_count, Ordering::Relaxed);
                 let start = Instant::now();
                 for seq in 0..iters {
-                    sender.goal(&PingGoal { seq }).unwrap();
+                    // Over its queue limit in central the sender is refused: it waits and
+                    // sends again (backpressure), as a real module would.
+                    while let Err(e) = sender.goal(&PingGoal { seq }) {
+                        match e {
+                            ModuleError::Route(RouteError::OverLimit { .. }) => {
+                                tokio::time::sleep(Duration::from_micros(100)).await
+                            }
+                            other => panic!("sending a goal failed: {other}"),
+                        }
+                    }
                 }
-                while count.load(Ordering::Relaxed) < target {
+                while count.load(Ordering::Relaxed) < goal_count {
                     let _ =
                         tokio::time::timeout(Duration::from_millis(10), notify.notified()).await;
                 }
