@@ -8,7 +8,12 @@
 //! - central publishes frames for it on `tca/down/<zid>`; the module subscribes there;
 //! - the module holds the liveliness token `tca/alive/<zid>`; when its session ends (it
 //!   leaves, crashes or the network drops) zenoh withdraws the token and central closes the
-//!   link.
+//!   link;
+//! - central holds the liveliness token `tca/central` ([`CENTRAL_ALIVE_KEY`]); a module that
+//!   sees it withdrawn knows central is gone (killed, or the network dropped). Its zenoh session
+//!   keeps trying to reach the router with exponential backoff ([`RETRY_PERIOD_INIT_MS`] up to
+//!   [`RETRY_PERIOD_MAX_MS`]); when the token is back, the module says hello and registers
+//!   again on the new central.
 //!
 //! Publications are reliable with blocking congestion control (no frame is silently dropped)
 //! and express (sent at once, not batched), and multicast scouting is off: modules find central
@@ -52,6 +57,19 @@ pub fn down_key(zid: &str) -> String {
 pub fn alive_key(zid: &str) -> String {
     format!("tca/alive/{zid}")
 }
+
+/// Central's liveliness token: modules watch it to notice that central went away (its token is
+/// withdrawn when its process dies or the network drops) and came back (they then say hello and
+/// register again).
+pub const CENTRAL_ALIVE_KEY: &str = "tca/central";
+
+/// How a module's zenoh session retries a lost or refused connection to central: the first
+/// retry after this many milliseconds, each next one after twice as long, up to
+/// [`RETRY_PERIOD_MAX_MS`].
+pub const RETRY_PERIOD_INIT_MS: u64 = 250;
+
+/// The longest wait between two attempts to reach central again, milliseconds.
+pub const RETRY_PERIOD_MAX_MS: u64 = 4000;
 
 fn endpoints_json(endpoints: &[String]) -> Result<String> {
     for e in endpoints {
@@ -196,6 +214,14 @@ pub fn client_config(connect: &[String]) -> Result<zenoh::Config> {
     config
         .insert_json5("listen/endpoints", "[]")
         .map_err(|e| CentralError::Zenoh(format!("listen endpoints: {e}")))?;
+    // When central goes away, keep trying to reach it, backing off.
+    let retry = format!(
+        "{{ period_init_ms: {RETRY_PERIOD_INIT_MS}, period_max_ms: {RETRY_PERIOD_MAX_MS}, \
+         period_increase_factor: 2.0 }}"
+    );
+    config
+        .insert_json5("connect/retry", &retry)
+        .map_err(|e| CentralError::Zenoh(format!("connect/retry: {e}")))?;
     Ok(config)
 }
 
@@ -210,6 +236,7 @@ pub(crate) struct ZenohCentral {
     endpoints: Vec<String>,
     _frames: zenoh::pubsub::Subscriber<()>,
     _alive: zenoh::pubsub::Subscriber<()>,
+    _token: zenoh::liveliness::LivelinessToken,
 }
 
 impl ZenohCentral {
@@ -311,12 +338,19 @@ impl ZenohCentral {
                 .await
                 .map_err(|e| CentralError::Zenoh(e.to_string()))?
         };
+        // Declared last: a module that sees it can say hello at once.
+        let token = session
+            .liveliness()
+            .declare_token(CENTRAL_ALIVE_KEY)
+            .await
+            .map_err(|e| CentralError::Zenoh(e.to_string()))?;
         tracing::info!(endpoints = ?listen, "central listening over zenoh");
         Ok(ZenohCentral {
             session,
             endpoints: listen.to_vec(),
             _frames: frames,
             _alive: alive,
+            _token: token,
         })
     }
 

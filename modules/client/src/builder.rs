@@ -7,7 +7,7 @@ use std::time::Duration;
 use tca_messages::control::{Credentials, Hello, Register, RegisterOutcome, Welcome, names};
 use tca_messages::{
     Class, DEFAULT_MAX_FRAME_BYTES, Envelope, Message, MessageId, MessageName, ModuleName,
-    RouteError, SendOptions, decode, decode_data, encode, encode_data, now_ns,
+    RouteError, decode, decode_data, encode, encode_data,
 };
 
 use crate::connector::Connector;
@@ -16,6 +16,7 @@ use crate::credentials::{credentials_from_env, hello_payload};
 use crate::error::{HandlerError, ModuleError, Result};
 use crate::handler::{HandlerEntry, erase};
 use crate::module::{DEFAULT_QUERY_TIMEOUT, Module};
+use crate::rejoin::{Greeting, Rejoiner, bootstrap};
 
 /// How long connecting waits for central's welcome and registration answer.
 pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
@@ -179,7 +180,7 @@ impl ModuleBuilder {
         };
         let credentials = self.credentials.or_else(credentials_from_env);
         let (hello_name, hello_data) = hello_payload(hello, credentials)?;
-        let hello_env = bootstrap(&name, hello_name, MessageId::new(0, 0), hello_data)?;
+        let hello_env = bootstrap(&name, hello_name, MessageId::new(0, 0), hello_data.clone())?;
         link.tx.send(encode(&hello_env)?.into())?;
         let answer = next_answer(&mut link.rx, hello_env.id, connector).await?;
         let welcome: Welcome = match answer.class {
@@ -203,7 +204,8 @@ impl ModuleBuilder {
                 .collect(),
         };
         let reg_id = MessageId::new(welcome.link, 1);
-        let reg_env = bootstrap(&name, names::REGISTER, reg_id, encode_data(&register)?)?;
+        let register = encode_data(&register)?;
+        let reg_env = bootstrap(&name, names::REGISTER, reg_id, register.clone())?;
         link.tx.send(encode(&reg_env)?.into())?;
         let answer = next_answer(&mut link.rx, reg_id, connector).await?;
         if answer.class != Class::Reply {
@@ -234,28 +236,22 @@ impl ModuleBuilder {
             self.sim_time,
             link.keep,
         );
+        // Over zenoh, central can die and come back: keep what it takes to join it again.
+        let rejoiner = link.presence.is_some().then(|| {
+            Rejoiner::new(Greeting {
+                hello_name,
+                hello_data,
+                register,
+            })
+        });
         tokio::spawn(Module::receive_loop(
             std::sync::Arc::downgrade(&module.shared),
             link.rx,
+            link.presence,
+            rejoiner,
         ));
         Ok(module)
     }
-}
-
-fn bootstrap(name: &ModuleName, control: &str, id: MessageId, data: Vec<u8>) -> Result<Envelope> {
-    Ok(Envelope {
-        id,
-        class: Class::Control,
-        name: MessageName::new(control).map_err(|e| ModuleError::Usage(e.to_string()))?,
-        sender: name.clone(),
-        context: None,
-        node: None,
-        correlation: None,
-        timestamp_ns: now_ns(),
-        options: SendOptions::default(),
-        redelivery: 0,
-        data,
-    })
 }
 
 /// Waits for central's answer to a bootstrap message.

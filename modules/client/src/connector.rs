@@ -6,10 +6,11 @@ use bytes::Bytes;
 use tca_central::CentralHandle;
 use tca_central::inproc::InProcSender;
 use tca_central::zenoh_transport::{
-    ZenohLogin, alive_key, client_config_with_login, down_key, up_key,
+    CENTRAL_ALIVE_KEY, ZenohLogin, alive_key, client_config_with_login, down_key, up_key,
 };
 use tokio::sync::mpsc;
 use zenoh::qos::CongestionControl;
+use zenoh::sample::SampleKind;
 
 use crate::error::{ModuleError, Result};
 
@@ -70,6 +71,7 @@ impl Connector {
                 Ok(Link {
                     tx,
                     rx,
+                    presence: None,
                     keep: Keep::InProc(Arc::new(link)),
                 })
             }
@@ -114,12 +116,24 @@ pub(crate) struct ZenohLink {
     session: zenoh::Session,
     subscriber: zenoh::pubsub::Subscriber<()>,
     token: zenoh::liveliness::LivelinessToken,
+    central: zenoh::pubsub::Subscriber<()>,
+}
+
+/// Whether central is there, as a zenoh link sees it (its liveliness token).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Presence {
+    /// Central's token appeared: central is (back) up.
+    Up,
+    /// Central's token was withdrawn: central died or the network dropped.
+    Down,
 }
 
 /// An open link.
 pub(crate) struct Link {
     pub(crate) tx: FrameTx,
     pub(crate) rx: mpsc::UnboundedReceiver<Bytes>,
+    /// Central's comings and goings (zenoh only: an in-process central cannot die alone).
+    pub(crate) presence: Option<mpsc::UnboundedReceiver<Presence>>,
     pub(crate) keep: Keep,
 }
 
@@ -162,6 +176,19 @@ async fn open_zenoh(endpoints: &[String], login: Option<&ZenohLogin>) -> Result<
         .declare_token(alive_key(&zid))
         .await
         .map_err(|e| ModuleError::Connect(e.to_string()))?;
+    let (presence_tx, presence) = mpsc::unbounded_channel();
+    let central = session
+        .liveliness()
+        .declare_subscriber(CENTRAL_ALIVE_KEY)
+        .history(true)
+        .callback(move |sample| {
+            let _ = presence_tx.send(match sample.kind() {
+                SampleKind::Put => Presence::Up,
+                SampleKind::Delete => Presence::Down,
+            });
+        })
+        .await
+        .map_err(|e| ModuleError::Connect(e.to_string()))?;
     let (out_tx, mut out_rx) = mpsc::unbounded_channel::<Bytes>();
     tokio::spawn(async move {
         while let Some(frame) = out_rx.recv().await {
@@ -173,10 +200,12 @@ async fn open_zenoh(endpoints: &[String], login: Option<&ZenohLogin>) -> Result<
     Ok(Link {
         tx: FrameTx::Zenoh(out_tx),
         rx,
+        presence: Some(presence),
         keep: Keep::Zenoh(ZenohLink {
             session,
             subscriber,
             token,
+            central,
         }),
     })
 }

@@ -52,6 +52,15 @@ pub enum ModuleError {
     /// The link to central is closed.
     #[error("the link to central is closed (central stopped or the network failed)")]
     Disconnected,
+    /// Central went away (its process died or the network dropped) while this module was
+    /// connected over zenoh. What was in flight is lost; the module rejoins central by itself
+    /// when it is back (see [`crate::Module::wait_online`]).
+    #[error(
+        "central went away (its process stopped or the network dropped); what was in flight is lost. \
+         The module reconnects and registers again by itself when central is back: restart central \
+         (same endpoint) and send again"
+    )]
+    CentralLost,
     /// The module was used wrongly.
     #[error("{0}")]
     Usage(String),

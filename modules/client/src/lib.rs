@@ -46,6 +46,7 @@ pub mod credentials;
 pub mod error;
 mod handler;
 pub mod module;
+pub mod rejoin;
 
 pub use builder::ModuleBuilder;
 pub use compute_time::ComputeTime;

@@ -19,10 +19,11 @@ use tca_messages::{
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::AbortHandle;
 
-use crate::connector::FrameTx;
+use crate::connector::{FrameTx, Presence};
 use crate::context::Context;
 use crate::error::{ModuleError, Result};
 use crate::handler::HandlerEntry;
+use crate::rejoin::{Rejoiner, Verdict};
 
 /// How long a query waits for its answer unless told otherwise.
 pub const DEFAULT_QUERY_TIMEOUT: Duration = Duration::from_secs(30);
@@ -30,7 +31,10 @@ pub const DEFAULT_QUERY_TIMEOUT: Duration = Duration::from_secs(30);
 /// State shared by every handle to one connected module.
 pub(crate) struct Shared {
     pub(crate) name: ModuleName,
-    pub(crate) link_no: u32,
+    /// The link number central gave this module (new after rejoining a restarted central).
+    link_no: AtomicU32,
+    /// Registered with a live central (false while central is gone; see [`crate::rejoin`]).
+    online: AtomicBool,
     seq: AtomicU32,
     tx: FrameTx,
     max_frame_bytes: usize,
@@ -48,6 +52,8 @@ pub(crate) struct Shared {
     /// next one cannot start earlier, as the module handles them in turn.
     busy_until: std::sync::atomic::AtomicU64,
     closed_signal: tokio::sync::watch::Sender<bool>,
+    /// Changes when the module rejoins a restarted central.
+    online_signal: tokio::sync::watch::Sender<bool>,
     /// Keeps the transport open while any handle lives (taken by [`Module::abort_link`]).
     keep: Mutex<Option<crate::connector::Keep>>,
 }
@@ -119,7 +125,8 @@ impl Module {
         Module {
             shared: Arc::new(Shared {
                 name,
-                link_no,
+                link_no: AtomicU32::new(link_no),
+                online: AtomicBool::new(true),
                 seq: AtomicU32::new(first_seq),
                 tx,
                 max_frame_bytes,
@@ -133,6 +140,7 @@ impl Module {
                 base_clock: std::sync::atomic::AtomicU64::new(0),
                 busy_until: std::sync::atomic::AtomicU64::new(0),
                 closed_signal: tokio::sync::watch::channel(false).0,
+                online_signal: tokio::sync::watch::channel(true).0,
                 keep: Mutex::new(Some(keep)),
             }),
             context: None,
@@ -496,6 +504,7 @@ impl Module {
                 self.observe(answer.timestamp_ns);
                 Ok(answer)
             }
+            Ok(Err(_)) if !self.is_online() => Err(ModuleError::CentralLost),
             Ok(Err(_)) => Err(ModuleError::Disconnected),
             Err(_) => {
                 lock(&self.shared.pending).remove(&id);
@@ -509,7 +518,7 @@ impl Module {
 
     pub(crate) fn next_id(&self) -> MessageId {
         let seq = self.shared.seq.fetch_add(1, Ordering::Relaxed);
-        MessageId::new(self.shared.link_no, seq)
+        MessageId::new(self.shared.link_no.load(Ordering::Relaxed), seq)
     }
 
     pub(crate) fn envelope(
@@ -538,6 +547,21 @@ impl Module {
         if self.is_closed() {
             return Err(ModuleError::Disconnected);
         }
+        if !self.is_online() {
+            return Err(ModuleError::CentralLost);
+        }
+        self.send_frame(envelope)
+    }
+
+    /// Sends a hello or registration, online or not.
+    pub(crate) fn send_bootstrap(&self, envelope: &Envelope) -> Result<()> {
+        if self.is_closed() {
+            return Err(ModuleError::Disconnected);
+        }
+        self.send_frame(envelope)
+    }
+
+    fn send_frame(&self, envelope: &Envelope) -> Result<()> {
         let frame = encode(envelope)?;
         if frame.len() > self.shared.max_frame_bytes {
             return Err(ModuleError::Codec(tca_messages::CodecError::TooLarge {
@@ -549,24 +573,57 @@ impl Module {
     }
 
     /// Reads frames from central until the link closes. Holds the module weakly, so the link
-    /// closes when the last [`Module`] handle is dropped (as when a module process dies).
+    /// closes when the last [`Module`] handle is dropped (as when a module process dies). Over
+    /// zenoh it also follows central's presence and rejoins a restarted central
+    /// ([`crate::rejoin`]).
     pub(crate) async fn receive_loop(
         shared: std::sync::Weak<Shared>,
         mut rx: mpsc::UnboundedReceiver<Bytes>,
+        mut presence: Option<mpsc::UnboundedReceiver<Presence>>,
+        mut rejoiner: Option<Rejoiner>,
     ) {
-        while let Some(frame) = rx.recv().await {
-            let Some(shared) = shared.upgrade() else {
-                return;
-            };
-            let module = Module {
+        let upgrade = |shared: &std::sync::Weak<Shared>| {
+            shared.upgrade().map(|shared| Module {
                 shared,
                 context: None,
                 clock: None,
-            };
-            match decode(&frame, usize::MAX) {
-                Ok(envelope) => module.on_envelope(envelope),
-                Err(e) => {
-                    tracing::warn!(module = %module.shared.name, error = %e, "bad frame from central")
+            })
+        };
+        loop {
+            let deadline = rejoiner.as_ref().and_then(Rejoiner::deadline);
+            tokio::select! {
+                frame = rx.recv() => {
+                    let Some(frame) = frame else { break };
+                    let Some(module) = upgrade(&shared) else { return };
+                    let envelope = match decode(&frame, usize::MAX) {
+                        Ok(envelope) => envelope,
+                        Err(e) => {
+                            tracing::warn!(module = %module.shared.name, error = %e, "bad frame from central");
+                            continue;
+                        }
+                    };
+                    match rejoiner.as_mut().map(|r| r.on_envelope(&module, &envelope)) {
+                        None | Some(Verdict::Handle) => module.on_envelope(envelope),
+                        Some(Verdict::Consumed) => {}
+                        Some(Verdict::Refused(reason)) => {
+                            tracing::error!(module = %module.shared.name, %reason, "central refused this module when it rejoined; it stops");
+                            break;
+                        }
+                    }
+                }
+                p = next_presence(&mut presence) => {
+                    let Some(module) = upgrade(&shared) else { return };
+                    match (p, rejoiner.as_mut()) {
+                        (Some(p), Some(r)) => r.on_presence(&module, p),
+                        (Some(_), None) => {}
+                        (None, _) => presence = None,
+                    }
+                }
+                _ = sleep_until(deadline) => {
+                    let Some(module) = upgrade(&shared) else { return };
+                    if let Some(r) = rejoiner.as_mut() {
+                        r.on_timer(&module);
+                    }
                 }
             }
         }
@@ -576,14 +633,41 @@ impl Module {
         shared.closed.store(true, Ordering::Relaxed);
         shared.closed_signal.send_replace(true);
         // Fail everything still waiting: dropping the senders wakes the waiters.
-        lock(&shared.pending).clear();
-        for (_, w) in lock(&shared.watchers).drain() {
-            let _ = w.send(Err(ModuleError::Disconnected));
-        }
-        for (_, h) in lock(&shared.running).drain() {
-            h.abort();
-        }
+        fail_in_flight(&shared, || ModuleError::Disconnected);
         tracing::info!(module = %shared.name, "link to central closed");
+    }
+
+    /// Central is gone: what was in flight went with it. Waiting queries and task watchers fail
+    /// with [`ModuleError::CentralLost`], running handlers stop, new sends are refused until
+    /// the module has rejoined.
+    pub(crate) fn go_offline(&self) {
+        self.shared.online.store(false, Ordering::Relaxed);
+        fail_in_flight(&self.shared, || ModuleError::CentralLost);
+    }
+
+    /// Registered again with a new central.
+    pub(crate) fn go_online(&self) {
+        self.shared.online.store(true, Ordering::Relaxed);
+        self.shared.online_signal.send_replace(true);
+    }
+
+    /// The link number of a new central's welcome.
+    pub(crate) fn set_link(&self, link: u32) {
+        self.shared.link_no.store(link, Ordering::Relaxed);
+    }
+
+    /// Whether the module is registered with a live central. False while central is gone and
+    /// until the module has rejoined it (zenoh only; see [`crate::rejoin`]).
+    pub fn is_online(&self) -> bool {
+        self.shared.online.load(Ordering::Relaxed)
+    }
+
+    /// Waits until the module is registered with a live central (at once when it is), or for
+    /// at most `timeout`; returns whether it is.
+    pub async fn wait_online(&self, timeout: Duration) -> bool {
+        let mut online = self.shared.online_signal.subscribe();
+        let wait = online.wait_for(|_| self.is_online());
+        matches!(tokio::time::timeout(timeout, wait).await, Ok(Ok(_)))
     }
 
     fn on_envelope(&self, envelope: Envelope) {
@@ -739,6 +823,35 @@ impl Module {
         if let Err(e) = self.transmit(&envelope) {
             tracing::warn!(error = %e, name = %request.name, "answer not sent");
         }
+    }
+}
+
+/// Fails every waiting query (dropping its sender), task watcher and running handler.
+fn fail_in_flight(shared: &Shared, error: impl Fn() -> ModuleError) {
+    lock(&shared.pending).clear();
+    for (_, w) in lock(&shared.watchers).drain() {
+        let _ = w.send(Err(error()));
+    }
+    for (_, h) in lock(&shared.running).drain() {
+        h.abort();
+    }
+}
+
+/// The next change of central's presence; never, without a presence feed.
+async fn next_presence(
+    presence: &mut Option<mpsc::UnboundedReceiver<Presence>>,
+) -> Option<Presence> {
+    match presence {
+        Some(rx) => rx.recv().await,
+        None => std::future::pending().await,
+    }
+}
+
+/// Sleeps until the deadline; forever without one.
+async fn sleep_until(deadline: Option<tokio::time::Instant>) {
+    match deadline {
+        Some(d) => tokio::time::sleep_until(d).await,
+        None => std::future::pending().await,
     }
 }
 

@@ -1,0 +1,243 @@
+//! Rejoining central after it died and came back (zenoh links only).
+//!
+//! A module over zenoh watches central's liveliness token. When the token is withdrawn, central
+//! is gone (its process was killed, or the network dropped): the module goes *offline*. What
+//! was in flight is lost with central, so the module fails its waiting queries and task
+//! watchers at once with [`ModuleError::CentralLost`](crate::ModuleError::CentralLost), stops
+//! its running handlers (their ends would mean nothing to a new central), and refuses new
+//! sends with the same error. Its zenoh session meanwhile keeps trying to reach the router,
+//! backing off (see `tca_central::zenoh_transport::RETRY_PERIOD_INIT_MS`).
+//!
+//! When central's token is back, the module says hello again and registers the same handlers;
+//! when central welcomes it, it is *online* again and serves as before. Until then it repeats
+//! its hello with exponential backoff ([`FIRST_RETRY`] doubling up to [`LONGEST_RETRY`]) in case
+//! a hello was lost while the new central was starting.
+
+use std::time::Duration;
+
+use tca_messages::control::{RegisterOutcome, Welcome, names};
+use tca_messages::{
+    Class, Envelope, MessageId, MessageName, ModuleName, RouteError, SendOptions, decode_data,
+    now_ns,
+};
+use tokio::time::Instant;
+
+use crate::connector::Presence;
+use crate::error::{ModuleError, Result};
+use crate::module::Module;
+
+/// The first wait before saying hello again to a central that has not answered.
+pub const FIRST_RETRY: Duration = Duration::from_millis(250);
+
+/// The longest wait between two hellos.
+pub const LONGEST_RETRY: Duration = Duration::from_secs(5);
+
+/// How long a registration may go unanswered before the module starts over with a hello.
+const REGISTER_PATIENCE: Duration = Duration::from_secs(5);
+
+/// What a module says to join central: kept to say it again.
+#[derive(Clone, Debug)]
+pub(crate) struct Greeting {
+    /// `tca.hello` or `tca.helloAuth`.
+    pub(crate) hello_name: &'static str,
+    /// The hello's data (with credentials, when the module has them).
+    pub(crate) hello_data: Vec<u8>,
+    /// The encoded [`tca_messages::control::Register`] of every handler.
+    pub(crate) register: Vec<u8>,
+}
+
+/// Where a module stands with central.
+#[derive(Debug)]
+enum Phase {
+    /// Registered; frames flow.
+    Online,
+    /// Central is gone or has not welcomed us yet: say hello at `next`.
+    Hello { attempt: u32, next: Instant },
+    /// Welcomed; the registration `id` awaits its answer until `deadline`.
+    Register { id: MessageId, deadline: Instant },
+}
+
+/// The rejoin state machine of one zenoh module's receive loop.
+#[derive(Debug)]
+pub(crate) struct Rejoiner {
+    greeting: Greeting,
+    phase: Phase,
+}
+
+/// What the receive loop should do with an envelope after the rejoiner saw it.
+#[derive(Debug, PartialEq, Eq)]
+pub(crate) enum Verdict {
+    /// An ordinary envelope: handle it.
+    Handle,
+    /// Consumed by the handshake, or stale while offline: drop it.
+    Consumed,
+    /// Central refused the module on rejoining: the module cannot serve any more.
+    Refused(String),
+}
+
+impl Rejoiner {
+    pub(crate) fn new(greeting: Greeting) -> Self {
+        Rejoiner {
+            greeting,
+            phase: Phase::Online,
+        }
+    }
+
+    /// When the loop must wake up for the next hello or to give up on a registration.
+    pub(crate) fn deadline(&self) -> Option<Instant> {
+        match self.phase {
+            Phase::Online => None,
+            Phase::Hello { next, .. } => Some(next),
+            Phase::Register { deadline, .. } => Some(deadline),
+        }
+    }
+
+    /// Central appeared or vanished.
+    pub(crate) fn on_presence(&mut self, module: &Module, presence: Presence) {
+        match (presence, &self.phase) {
+            (Presence::Down, Phase::Online) => {
+                tracing::warn!(module = %module.name(), "central went away; failing what was in flight and waiting for it to come back");
+                module.go_offline();
+                self.phase = Phase::Hello {
+                    attempt: 0,
+                    next: Instant::now() + FIRST_RETRY,
+                };
+            }
+            (Presence::Down, _) => {
+                self.phase = Phase::Hello {
+                    attempt: 0,
+                    next: Instant::now() + FIRST_RETRY,
+                };
+            }
+            (Presence::Up, Phase::Online) => {}
+            (Presence::Up, _) => {
+                tracing::info!(module = %module.name(), "central is back; saying hello");
+                self.say_hello(module, 0);
+            }
+        }
+    }
+
+    /// The deadline passed.
+    pub(crate) fn on_timer(&mut self, module: &Module) {
+        match self.phase {
+            Phase::Online => {}
+            Phase::Hello { attempt, .. } => self.say_hello(module, attempt + 1),
+            Phase::Register { .. } => {
+                tracing::warn!(module = %module.name(), "central did not answer the registration; saying hello again");
+                self.say_hello(module, 0);
+            }
+        }
+    }
+
+    /// Sees every envelope from central first.
+    pub(crate) fn on_envelope(&mut self, module: &Module, envelope: &Envelope) -> Verdict {
+        match self.phase {
+            Phase::Online => Verdict::Handle,
+            Phase::Hello { attempt, next } => {
+                if envelope.correlation != Some(MessageId::new(0, 0)) {
+                    tracing::debug!(name = %envelope.name, "dropped while rejoining central");
+                    return Verdict::Consumed;
+                }
+                if envelope.class != Class::Control {
+                    return Verdict::Refused(refusal(envelope));
+                }
+                let welcome: Welcome = match decode_data(&envelope.data) {
+                    Ok(w) => w,
+                    Err(e) => {
+                        tracing::warn!(error = %e, "bad welcome from central");
+                        self.phase = Phase::Hello { attempt, next };
+                        return Verdict::Consumed;
+                    }
+                };
+                module.set_link(welcome.link);
+                let id = module.next_id();
+                match self.send(module, names::REGISTER, id, self.greeting.register.clone()) {
+                    Ok(()) => {
+                        self.phase = Phase::Register {
+                            id,
+                            deadline: Instant::now() + REGISTER_PATIENCE,
+                        }
+                    }
+                    Err(e) => tracing::warn!(error = %e, "cannot send the registration"),
+                }
+                Verdict::Consumed
+            }
+            Phase::Register { id, .. } => {
+                if envelope.correlation != Some(id) {
+                    tracing::debug!(name = %envelope.name, "dropped while registering again");
+                    return Verdict::Consumed;
+                }
+                if envelope.class != Class::Reply {
+                    return Verdict::Refused(refusal(envelope));
+                }
+                match decode_data::<RegisterOutcome>(&envelope.data) {
+                    Ok(outcome) if outcome.refused.is_empty() => {
+                        tracing::info!(module = %module.name(), link = id.link(), "rejoined central: registered again");
+                        self.phase = Phase::Online;
+                        module.go_online();
+                        Verdict::Consumed
+                    }
+                    Ok(outcome) => Verdict::Refused(
+                        outcome
+                            .refused
+                            .into_iter()
+                            .map(|(n, r)| format!("{n}: {r}"))
+                            .collect::<Vec<_>>()
+                            .join("; "),
+                    ),
+                    Err(e) => Verdict::Refused(format!("unreadable registration answer: {e}")),
+                }
+            }
+        }
+    }
+
+    fn say_hello(&mut self, module: &Module, attempt: u32) {
+        let wait = FIRST_RETRY
+            .saturating_mul(1 << attempt.min(8))
+            .min(LONGEST_RETRY);
+        if let Err(e) = self.send(
+            module,
+            self.greeting.hello_name,
+            MessageId::new(0, 0),
+            self.greeting.hello_data.clone(),
+        ) {
+            tracing::warn!(error = %e, "cannot say hello to central");
+        }
+        self.phase = Phase::Hello {
+            attempt,
+            next: Instant::now() + wait,
+        };
+    }
+
+    fn send(&self, module: &Module, name: &str, id: MessageId, data: Vec<u8>) -> Result<()> {
+        module.send_bootstrap(&bootstrap(module.name(), name, id, data)?)
+    }
+}
+
+/// A handshake envelope: hello (id 0.0, before the link number is known) or registration.
+pub(crate) fn bootstrap(
+    name: &ModuleName,
+    control: &str,
+    id: MessageId,
+    data: Vec<u8>,
+) -> Result<Envelope> {
+    Ok(Envelope {
+        id,
+        class: Class::Control,
+        name: MessageName::new(control).map_err(|e| ModuleError::Usage(e.to_string()))?,
+        sender: name.clone(),
+        context: None,
+        node: None,
+        correlation: None,
+        timestamp_ns: now_ns(),
+        options: SendOptions::default(),
+        redelivery: 0,
+        data,
+    })
+}
+
+fn refusal(envelope: &Envelope) -> String {
+    decode_data::<RouteError>(&envelope.data)
+        .map(|e| e.to_string())
+        .unwrap_or_else(|e| format!("unreadable answer: {e}"))
+}

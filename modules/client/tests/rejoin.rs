@@ -1,0 +1,177 @@
+//! Central goes away and comes back (issue 8 item 2), over zenoh: the modules notice at once
+//! (queries in flight and task watchers fail with `CentralLost`, new sends are refused with the
+//! same error instead of hanging), keep retrying, and register again with the new central on
+//! the same endpoint, after which messages flow as before.
+
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+use tca_central::{RunningCentral, StartOptions};
+use tca_module::{Connector, Module, ModuleError, SendOptions};
+
+/// Every await in a test is bounded by this.
+const STEP: Duration = Duration::from_secs(20);
+
+async fn within<T>(what: &str, f: impl std::future::Future<Output = T>) -> T {
+    match tokio::time::timeout(STEP, f).await {
+        Ok(v) => v,
+        Err(_) => panic!("timed out after {STEP:?}: {what}"),
+    }
+}
+
+/// Echo: a query answered with its argument.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Echo(u64);
+tca_messages::message!(Echo: query "echo" -> u64);
+
+/// Slow: a query answered after a long time (to be in flight when central goes).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Slow;
+tca_messages::message!(Slow: query "slow" -> u64);
+
+/// Park: a goal whose handler never ends by itself.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Park;
+tca_messages::message!(Park: goal "park");
+
+fn free_endpoint() -> String {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .map(|a| a.port())
+        .unwrap();
+    format!("tcp/127.0.0.1:{port}")
+}
+
+async fn central_at(endpoint: &str) -> RunningCentral {
+    tca_central::start(StartOptions {
+        listen: vec![endpoint.to_owned()],
+        ..StartOptions::default()
+    })
+    .await
+    .unwrap()
+}
+
+async fn server(connector: &Connector) -> Module {
+    Module::builder("server")
+        .handle(|_ctx, e: Echo| async move { Ok(e.0) })
+        .handle(|_ctx, _s: Slow| async move {
+            tokio::time::sleep(Duration::from_secs(60)).await;
+            Ok(0)
+        })
+        .handle(|_ctx, _p: Park| async move {
+            std::future::pending::<()>().await;
+            Ok(())
+        })
+        .connect(connector)
+        .await
+        .unwrap()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn modules_rejoin_a_central_that_came_back() {
+    let endpoint = free_endpoint();
+    let central = central_at(&endpoint).await;
+    let connector = Connector::zenoh(endpoint.clone());
+    let server = within("server connects", server(&connector)).await;
+    let client = within(
+        "client connects",
+        Module::builder("client").connect(&connector),
+    )
+    .await
+    .unwrap();
+    assert_eq!(within("echo", client.query(&Echo(7))).await.unwrap(), 7);
+
+    // Work in flight when central goes: a slow query and a watched goal.
+    let slow = {
+        let client = client.clone();
+        tokio::spawn(async move { client.query(&Slow).await })
+    };
+    let parked = client
+        .send_task(
+            &Park,
+            SendOptions {
+                notify: true,
+                ..SendOptions::default()
+            },
+        )
+        .unwrap();
+    tokio::time::sleep(Duration::from_millis(200)).await;
+
+    central.shutdown().await.unwrap();
+
+    // Both fail at once with CentralLost, not after the 30 s query timeout.
+    let lost = within("the slow query fails", slow).await.unwrap();
+    assert!(
+        matches!(lost, Err(ModuleError::CentralLost)),
+        "slow query: {lost:?}"
+    );
+    let outcome = within("the parked goal's watcher fails", parked.outcome()).await;
+    assert!(
+        matches!(outcome, Err(ModuleError::CentralLost)),
+        "parked goal: {outcome:?}"
+    );
+    assert!(!client.is_online() && !server.is_online());
+    // Sends while central is gone are refused, with the reason.
+    let refused = client.goal(&Park).unwrap_err();
+    assert!(matches!(refused, ModuleError::CentralLost), "{refused:?}");
+    assert!(
+        refused.to_string().contains("registers again by itself"),
+        "{refused}"
+    );
+    assert!(matches!(
+        within("query while central is gone", client.query(&Echo(1))).await,
+        Err(ModuleError::CentralLost)
+    ));
+
+    // Central comes back on the same endpoint: both modules register again by themselves.
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let central = central_at(&endpoint).await;
+    assert!(
+        client.wait_online(STEP).await,
+        "the client did not rejoin central"
+    );
+    assert!(
+        server.wait_online(STEP).await,
+        "the server did not rejoin central"
+    );
+    assert_eq!(
+        within("echo after rejoining", client.query(&Echo(42)))
+            .await
+            .unwrap(),
+        42
+    );
+    let registry = within("registry", client.registry()).await.unwrap();
+    assert!(
+        registry.entries.iter().any(|e| e.name.as_str() == "echo"),
+        "the server's handlers are registered again: {registry:?}"
+    );
+    assert_eq!(registry.modules.len(), 2, "{registry:?}");
+    // Goals flow again too: the new central keeps the new goal's node while it runs.
+    let parked = client
+        .send_task(
+            &Park,
+            SendOptions {
+                notify: true,
+                ..SendOptions::default()
+            },
+        )
+        .unwrap();
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let tree = within("tree", client.tree()).await.unwrap();
+    assert!(tree.text.contains("park"), "{}", tree.text);
+    drop(parked);
+    central.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn in_process_modules_never_go_offline() {
+    let central = tca_central::start(StartOptions::default()).await.unwrap();
+    let connector = Connector::InProcess(central.handle());
+    let server = within("server connects", server(&connector)).await;
+    assert!(server.is_online());
+    assert!(server.wait_online(Duration::from_millis(10)).await);
+    central.shutdown().await.unwrap();
+    within("link closes", server.closed()).await;
+    let err = server.goal(&Park).unwrap_err();
+    assert!(matches!(err, ModuleError::Disconnected), "{err:?}");
+}
