@@ -41,4 +41,4 @@ pub use record::{
 pub use script::{ModuleScript, RootTask, connection_order, module_script, root_tasks};
 pub use show::{ShowFilter, render, tree_at};
 pub use stats::{LogStats, ModuleStats, QueryStats, Span, TimeBase, stats};
-pub use writer::{FLUSH_INTERVAL, LogSink, LogWriter};
+pub use writer::{FLUSH_INTERVAL, LogSink, LogWriter, set_aside};

@@ -309,3 +309,64 @@ fn run_sink(mut writer: LogWriter, rx: mpsc::Receiver<SinkInput>) -> Result<()> 
     }
     writer.finish()
 }
+
+/// Moves an existing, non-empty log at `path` aside to the first free `STEM.N.mcap` next to it
+/// (N = 1, 2, ...) and returns where it went; `None` when there was nothing to keep.
+///
+/// A central restarted after a crash with the same `--log` must not overwrite the log that
+/// tells what happened before the crash: `tca central` and `tca up` call this before they
+/// create their log.
+pub fn set_aside(path: &Path) -> Result<Option<PathBuf>> {
+    let io = |source| LogError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    match std::fs::metadata(path) {
+        Ok(m) if m.len() > 0 => {}
+        Ok(_) => return Ok(None),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(io(e)),
+    }
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "traffic".into());
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "mcap".into());
+    for n in 1..100_000u32 {
+        let candidate = path.with_file_name(format!("{stem}.{n}.{ext}"));
+        if !candidate.exists() {
+            std::fs::rename(path, &candidate).map_err(io)?;
+            return Ok(Some(candidate));
+        }
+    }
+    Err(LogError::Write(format!(
+        "{}: no free name to keep the previous log under; remove old {stem}.N.{ext} files",
+        path.display()
+    )))
+}
+
+#[cfg(test)]
+mod set_aside_tests {
+    use super::set_aside;
+
+    #[test]
+    fn an_earlier_log_is_kept_under_the_next_free_number() {
+        let dir = tempfile::tempdir().unwrap();
+        let log = dir.path().join("traffic.mcap");
+        assert_eq!(set_aside(&log).unwrap(), None, "nothing to keep yet");
+        std::fs::write(&log, b"").unwrap();
+        assert_eq!(set_aside(&log).unwrap(), None, "an empty file is not kept");
+        std::fs::write(&log, b"first").unwrap();
+        let first = set_aside(&log).unwrap().unwrap();
+        assert_eq!(first, dir.path().join("traffic.1.mcap"));
+        std::fs::write(&log, b"second").unwrap();
+        let second = set_aside(&log).unwrap().unwrap();
+        assert_eq!(second, dir.path().join("traffic.2.mcap"));
+        assert!(!log.exists());
+        assert_eq!(std::fs::read(first).unwrap(), b"first");
+        assert_eq!(std::fs::read(second).unwrap(), b"second");
+    }
+}

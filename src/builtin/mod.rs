@@ -26,6 +26,10 @@ pub struct ModuleOptions {
     pub pictures: bool,
     /// What the planners charge to simulated time.
     pub compute: ComputeModel,
+    /// How fast the simulated Controller runs.
+    pub speed: tca_controller_sim::SpeedFactor,
+    /// Where the Controller and the LTM Manager keep what must survive their restart.
+    pub state_dir: Option<PathBuf>,
 }
 
 impl Default for ModuleOptions {
@@ -36,6 +40,8 @@ impl Default for ModuleOptions {
             out: None,
             pictures: false,
             compute: ComputeModel::default(),
+            speed: tca_controller_sim::SpeedFactor::AsFastAsPossible,
+            state_dir: None,
         }
     }
 }
@@ -60,6 +66,8 @@ pub async fn connect(
     setup.out = options.out.clone();
     setup.step_pictures = options.pictures;
     setup.compute = options.compute;
+    setup.speed = options.speed;
+    setup.state_dir = options.state_dir.clone();
     if let Some(dir) = &setup.out {
         std::fs::create_dir_all(dir)
             .map_err(|e| ModuleError::Usage(format!("cannot create {}: {e}", dir.display())))?;

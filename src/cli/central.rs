@@ -14,7 +14,8 @@ pub(crate) struct CentralArgs {
     /// zenoh endpoint to listen on (repeatable).
     #[arg(long, value_name = "ENDPOINT", default_value = DEFAULT_ENDPOINT)]
     listen: Vec<String>,
-    /// Write the traffic log (MCAP) to this file.
+    /// Write the traffic log (MCAP) to this file. A log already there (say, of a central that
+    /// crashed) is kept as FILE-STEM.N.mcap, never overwritten.
     #[arg(long, value_name = "FILE")]
     log: Option<PathBuf>,
     /// Most messages held for one module while it is down.
@@ -67,6 +68,15 @@ pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
         log: args.log.clone(),
         listen: args.listen.clone(),
     };
+    if let Some(log) = &args.log
+        && let Some(kept) = tca_logs::set_aside(log).context("cannot keep the previous log")?
+    {
+        eprintln!(
+            "the previous log {} is kept as {}",
+            log.display(),
+            kept.display()
+        );
+    }
     let central = tca_central::start(options)
         .await
         .context("cannot start central")?;

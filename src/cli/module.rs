@@ -33,6 +33,16 @@ pub(crate) struct ModuleArgs {
     /// times) or "measured".
     #[arg(long, value_enum, default_value_t = tca::walk::ComputeModel::Paper)]
     compute: tca::walk::ComputeModel,
+    /// The Controller simulator's speed: simulated time runs FACTOR times faster than the
+    /// wall clock (1 = real time, as the 1990 testbed). Default: as fast as it computes.
+    #[arg(long, value_name = "FACTOR")]
+    speed: Option<f64>,
+    /// Keep what must survive a restart of this module in DIR: the Controller's leg and
+    /// carriage state (and the outcomes of its latest commands, so a redelivered command is
+    /// not carried out twice), the LTM Manager's map tiles. Start the module again with the
+    /// same DIR after a crash and it goes on where it was.
+    #[arg(long, value_name = "DIR")]
+    state: Option<std::path::PathBuf>,
 }
 
 pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
@@ -51,6 +61,11 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
         out: args.out.clone(),
         pictures: args.pictures,
         compute: args.compute,
+        speed: match args.speed {
+            Some(f) => tca_controller_sim::SpeedFactor::Times(f),
+            None => tca_controller_sim::SpeedFactor::AsFastAsPossible,
+        },
+        state_dir: args.state.clone(),
     };
     let module = tca::builtin::connect(&args.name, &connector, &options)
         .await

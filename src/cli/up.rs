@@ -17,6 +17,15 @@ pub(crate) struct UpArgs {
 
 pub(crate) async fn run(args: UpArgs) -> anyhow::Result<ExitCode> {
     let launch = Launch::load(&args.file)?;
+    if let Some(log) = &launch.central.log
+        && let Some(kept) = tca_logs::set_aside(log).context("cannot keep the previous log")?
+    {
+        eprintln!(
+            "the previous log {} is kept as {}",
+            log.display(),
+            kept.display()
+        );
+    }
     let central = tca_central::start(StartOptions {
         log: launch.central.log.clone(),
         listen: launch.central.listen.clone(),

@@ -166,6 +166,8 @@ pub async fn walk(
     let progress_for_steps = progress.clone();
     let walker = Module::builder(format!("walker-{}", std::process::id()))
         .simulated_time(true)
+        // A module that dies while answering one of our queries is restarted; ask again.
+        .requery_after_crash(tca_module::REQUERIES_AFTER_CRASH)
         .handle(move |_ctx, s: StepPlanned| {
             let _ = steps_tx.send(s.clone());
             let _ = progress_for_steps.send(Progress::Step(s));
@@ -200,7 +202,16 @@ pub async fn walk(
         )?;
         let outcome = tokio::time::timeout(WALK_TIMEOUT, task.outcome())
             .await
-            .map_err(|_| anyhow::anyhow!("the walk did not end within {WALK_TIMEOUT:?}"))??;
+            .map_err(|_| anyhow::anyhow!("the walk did not end within {WALK_TIMEOUT:?}"))?
+            .map_err(|e| match e {
+                tca_module::ModuleError::CentralLost => anyhow::anyhow!(
+                    "central went away during the walk; the leg stands where it stopped. Start \
+                     central again on the same endpoint (the modules register again by \
+                     themselves), then run the same `tca walk --connect` again: it walks on \
+                     from where the leg stands"
+                ),
+                other => other.into(),
+            })?;
         let mut steps = 0;
         while let Ok(s) = steps_rx.try_recv() {
             footfalls.push(s.footfall);

@@ -34,6 +34,9 @@ pub struct SystemSetup {
     pub speed: SpeedFactor,
     /// What the planners charge to simulated time for their computing.
     pub compute: ComputeModel,
+    /// Where modules keep what must survive their restart (the Controller's state file, the
+    /// LTM Manager's map tiles); `None`: nothing is kept, a restarted module starts afresh.
+    pub state_dir: Option<PathBuf>,
 }
 
 /// What the planners charge to simulated time for their computing.
@@ -88,6 +91,7 @@ impl SystemSetup {
             step_pictures: false,
             speed: SpeedFactor::AsFastAsPossible,
             compute: ComputeModel::default(),
+            state_dir: None,
         })
     }
 
@@ -118,6 +122,7 @@ pub async fn connect_module(
             let mut config =
                 ControllerConfig::new((*setup.terrain).clone(), start).with_speed(setup.speed);
             config.bus_simulated_time = true;
+            config.state_file = setup.state_dir.as_ref().map(|d| d.join("controller.state"));
             tca_controller_sim::connect(connector, config).await
         }
         "ism" => {
@@ -131,6 +136,7 @@ pub async fn connect_module(
             let config = LtmConfig {
                 simulated_time: true,
                 sensor: tca_messages::walking::SensorKind::Perceptron,
+                store_dir: setup.state_dir.as_ref().map(|d| d.join("ltm-tiles")),
                 ..LtmConfig::default()
             };
             tca_ltm::connect(connector, config).await

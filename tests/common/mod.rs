@@ -143,3 +143,73 @@ where
     })
     .await
 }
+
+/// The modules registered with the central at `endpoint` (`tca registry --json`).
+pub async fn registered_modules(endpoint: &str) -> Result<Vec<String>, String> {
+    let e = endpoint.to_owned();
+    let out = tokio::task::spawn_blocking(move || {
+        Command::new(env!("CARGO_BIN_EXE_tca"))
+            .args(["registry", "--connect", &e, "--json"])
+            .output()
+    })
+    .await
+    .map_err(|e| e.to_string())?
+    .map_err(|e| e.to_string())?;
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).map_err(|e| e.to_string())?;
+    Ok(v["modules"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|m| m.as_str().map(str::to_owned))
+                .collect()
+        })
+        .unwrap_or_default())
+}
+
+/// Waits until every module in `names` is registered with the central at `endpoint`.
+pub async fn wait_for_modules(endpoint: &str, names: &[&str]) {
+    retry("the modules registered", || async {
+        let modules = registered_modules(endpoint).await?;
+        let missing: Vec<_> = names
+            .iter()
+            .filter(|n| !modules.iter().any(|m| m == *n))
+            .collect();
+        if missing.is_empty() {
+            Ok(())
+        } else {
+            Err(format!("still missing {missing:?}"))
+        }
+    })
+    .await
+}
+
+/// Runs `tca ARGS` to its end and returns its exit status, stdout and stderr.
+pub async fn run_tca(
+    what: &str,
+    args: &[&str],
+    limit: Duration,
+) -> (std::process::ExitStatus, String, String) {
+    let args: Vec<String> = args.iter().map(|a| (*a).to_owned()).collect();
+    let run = tokio::task::spawn_blocking(move || {
+        Command::new(env!("CARGO_BIN_EXE_tca"))
+            .args(&args)
+            .stdin(Stdio::null())
+            .output()
+    });
+    let out = match tokio::time::timeout(limit, run).await {
+        Ok(out) => out.expect("joins").expect("tca runs"),
+        Err(_) => panic!("timed out after {limit:?}: {what}"),
+    };
+    (
+        out.status,
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// The JSON report on the last line of `tca walk --json`'s stdout.
+pub fn walk_report(stdout: &str, stderr: &str) -> serde_json::Value {
+    let last = stdout.trim().lines().last().unwrap_or_default();
+    serde_json::from_str(last)
+        .unwrap_or_else(|e| panic!("no walk report ({e}): {stdout}\n{stderr}"))
+}

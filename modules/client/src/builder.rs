@@ -18,6 +18,11 @@ use crate::handler::{HandlerEntry, erase};
 use crate::module::{DEFAULT_QUERY_TIMEOUT, Module};
 use crate::rejoin::{Greeting, Rejoiner, bootstrap};
 
+/// A sensible [`ModuleBuilder::requery_after_crash`] for modules whose peers are restarted
+/// when they crash (the walking modules use it): a query survives this many crashes of the
+/// module answering it.
+pub const REQUERIES_AFTER_CRASH: u32 = 3;
+
 /// How long connecting waits for central's welcome and registration answer.
 pub const CONNECT_TIMEOUT: Duration = Duration::from_secs(10);
 
@@ -26,6 +31,7 @@ pub struct ModuleBuilder {
     name: String,
     capacity: u32,
     query_timeout: Duration,
+    requery_after_crash: u32,
     max_frame_bytes: usize,
     replace: bool,
     sim_time: bool,
@@ -41,6 +47,7 @@ impl Module {
             name: name.into(),
             capacity: 1,
             query_timeout: DEFAULT_QUERY_TIMEOUT,
+            requery_after_crash: 0,
             max_frame_bytes: DEFAULT_MAX_FRAME_BYTES,
             replace: false,
             sim_time: false,
@@ -62,6 +69,16 @@ impl ModuleBuilder {
     /// How long queries wait for their answer (default 30 s).
     pub fn query_timeout(mut self, timeout: Duration) -> Self {
         self.query_timeout = timeout;
+        self
+    }
+
+    /// Send a query again, up to `times` times, when the module answering it dies before it
+    /// answers (central then fails the query with
+    /// [`RouteError::HandlerDied`](tca_messages::RouteError::HandlerDied)); the new query waits
+    /// in central until that module is back. Queries only ask for information, so asking again
+    /// is safe. Default 0: the caller sees the failure at once.
+    pub fn requery_after_crash(mut self, times: u32) -> Self {
+        self.requery_after_crash = times;
         self
     }
 
@@ -232,6 +249,7 @@ impl ModuleBuilder {
             link.tx,
             self.handlers,
             self.query_timeout,
+            self.requery_after_crash,
             self.max_frame_bytes,
             self.sim_time,
             link.keep,

@@ -48,7 +48,7 @@ mod handler;
 pub mod module;
 pub mod rejoin;
 
-pub use builder::ModuleBuilder;
+pub use builder::{ModuleBuilder, REQUERIES_AFTER_CRASH};
 pub use compute_time::ComputeTime;
 pub use connector::Connector;
 pub use context::Context;

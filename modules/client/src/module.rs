@@ -43,6 +43,8 @@ pub(crate) struct Shared {
     running: Mutex<HashMap<NodeId, AbortHandle>>,
     handlers: HashMap<MessageName, HandlerEntry>,
     pub(crate) query_timeout: Duration,
+    /// Queries are sent again this many times when their answering module dies.
+    requery_after_crash: u32,
     closed: AtomicBool,
     /// Stamp envelopes with simulated time (see [`Module::spend`]) instead of the wall clock.
     sim_time: bool,
@@ -118,6 +120,7 @@ impl Module {
         tx: FrameTx,
         handlers: HashMap<MessageName, HandlerEntry>,
         query_timeout: Duration,
+        requery_after_crash: u32,
         max_frame_bytes: usize,
         sim_time: bool,
         keep: crate::connector::Keep,
@@ -135,6 +138,7 @@ impl Module {
                 running: Mutex::new(HashMap::new()),
                 handlers,
                 query_timeout,
+                requery_after_crash,
                 closed: AtomicBool::new(false),
                 sim_time,
                 base_clock: std::sync::atomic::AtomicU64::new(0),
@@ -227,8 +231,25 @@ impl Module {
         timeout: Duration,
     ) -> Result<Q::Reply> {
         expect_class::<Q>(Class::Query)?;
-        let envelope = self.envelope(Class::Query, Q::NAME, encode_data(query)?, None)?;
-        let answer = self.request(envelope, timeout).await?;
+        let data = encode_data(query)?;
+        let mut crashes = 0;
+        let answer = loop {
+            let envelope = self.envelope(Class::Query, Q::NAME, data.clone(), None)?;
+            let answer = self.request(envelope, timeout).await?;
+            if answer.class == Class::Error
+                && crashes < self.shared.requery_after_crash
+                && let ModuleError::Route(RouteError::HandlerDied { .. }) = route_error(&answer)
+            {
+                crashes += 1;
+                tracing::info!(
+                    name = Q::NAME,
+                    attempt = crashes,
+                    "the module answering died; asking again"
+                );
+                continue;
+            }
+            break answer;
+        };
         match answer.class {
             Class::Reply => Ok(decode_data(&answer.data)?),
             Class::Failure => Err(ModuleError::HandlerFailed {

@@ -148,6 +148,10 @@ pub struct ControllerConfig {
     /// running as fast as possible add up like the real mechanism's. Default false (wall
     /// clock stamps).
     pub bus_simulated_time: bool,
+    /// Keep the Controller's state in this file ([`crate::persist`]): a Controller started
+    /// with it goes on from where the last one left the leg, and answers a redelivered command
+    /// it already carried out without moving again. `None`: start from `start` every time.
+    pub state_file: Option<std::path::PathBuf>,
 }
 
 impl ControllerConfig {
@@ -163,6 +167,7 @@ impl ControllerConfig {
             module_name: DEFAULT_MODULE_NAME.to_owned(),
             replace: true,
             bus_simulated_time: false,
+            state_file: None,
         }
     }
 

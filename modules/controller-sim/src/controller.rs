@@ -38,8 +38,19 @@ pub struct Snapshot {
     pub collisions: u32,
 }
 
+/// A Controller's state as [`Controller::saved`] returns it.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SavedController {
+    /// The simulator's leg, carriage, contact and clock.
+    pub sim: crate::sim::SimState,
+    /// Collisions so far.
+    pub collisions: u32,
+    /// Simulated idle time banked, nanoseconds.
+    pub idle_ns: u64,
+}
+
 /// Why a command ended with failure.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Failure {
     /// The reason sent back as the command's failure.
     pub reason: String,
@@ -119,6 +130,25 @@ impl Controller {
     /// The simulator (its state is the end of the move in progress, if any).
     pub fn simulator(&self) -> &LegSimulator {
         &self.sim
+    }
+
+    /// What a restarted Controller needs to go on from here: the end of the move in progress
+    /// (the simulator has computed it already), the collisions and the simulated idle time.
+    pub fn saved(&self) -> SavedController {
+        SavedController {
+            sim: self.sim.state(),
+            collisions: self.collisions,
+            idle_ns: u64::try_from(self.idle.as_nanos()).unwrap_or(u64::MAX),
+        }
+    }
+
+    /// Puts this Controller where a saved one was, idle from `now`.
+    pub fn restore(&mut self, saved: &SavedController, now: Instant) {
+        self.sim.restore(&saved.sim);
+        self.collisions = saved.collisions;
+        self.idle = Duration::from_nanos(saved.idle_ns);
+        self.motion = None;
+        self.idle_since = now;
     }
 
     /// The speed factor.

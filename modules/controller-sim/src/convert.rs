@@ -60,7 +60,7 @@ pub fn force_to_message(f: &ForceReading) -> ForceMessage {
 }
 
 /// The exception a failed command raises.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Raised {
     /// A move failed or was refused; the planner replans from where the leg is.
     MoveFailed(MoveFailed),

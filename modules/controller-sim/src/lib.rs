@@ -33,6 +33,7 @@
 pub mod config;
 pub mod controller;
 pub mod convert;
+pub mod persist;
 mod serve;
 pub mod sim;
 

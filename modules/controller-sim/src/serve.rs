@@ -16,11 +16,12 @@ use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
 use tokio::time::Instant;
 
 use crate::config::ControllerConfig;
-use crate::controller::{CommandRun, Controller, Snapshot};
+use crate::controller::{CommandRun, Controller, Failure, Snapshot};
 use crate::convert::{
     Raised, body_pose_to_message, carriage_point_to_message, force_to_message, joints_from_message,
     joints_to_message, world_point_to_message,
 };
+use crate::persist::Persistence;
 
 /// Connects the simulated Controller to central under `config.module_name` and serves the
 /// Controller's messages (§4.2) until the returned [`Module`] (and every clone) is dropped
@@ -37,8 +38,24 @@ pub async fn connect(
     connector: &Connector,
     config: ControllerConfig,
 ) -> Result<Module, ModuleError> {
-    let controller = Controller::new(&config, Instant::now())
+    let mut controller = Controller::new(&config, Instant::now())
         .map_err(|e| ModuleError::Usage(format!("controller configuration: {e}")))?;
+    let persistence = match &config.state_file {
+        Some(path) => {
+            let (persistence, saved) =
+                Persistence::open(path).map_err(|e| ModuleError::Usage(e.to_string()))?;
+            if let Some(saved) = saved {
+                controller.restore(&saved, Instant::now());
+                tracing::info!(file = %path.display(), carriage_y_m = saved.sim.carriage.y_m, "controller state restored: the leg is where the last controller left it");
+            } else {
+                persistence
+                    .write(controller.saved())
+                    .map_err(|e| ModuleError::Usage(e.to_string()))?;
+            }
+            Some(Arc::new(Mutex::new(persistence)))
+        }
+        None => None,
+    };
     tracing::info!(
         module = %config.module_name,
         speed = %config.speed,
@@ -47,6 +64,7 @@ pub async fn connect(
     let s = Shared {
         state: Arc::new(Mutex::new(controller)),
         turn: Arc::new(tokio::sync::Mutex::new(())),
+        persistence,
     };
     let builder = Module::builder(config.module_name.clone())
         .replace(config.replace)
@@ -148,6 +166,8 @@ struct Shared {
     state: Arc<Mutex<Controller>>,
     /// Held by a command for its whole run, wall-clock wait included.
     turn: Arc<tokio::sync::Mutex<()>>,
+    /// The state file, when the Controller keeps one.
+    persistence: Option<Arc<Mutex<Persistence>>>,
 }
 
 impl Shared {
@@ -168,9 +188,22 @@ impl Shared {
         start: impl FnOnce(&mut Controller, Instant) -> CommandRun,
     ) -> Result<(), HandlerError> {
         let _turn = self.turn.lock().await;
+        if let Some(outcome) = self.already_done(ctx) {
+            // Delivered again after a Controller died before answering, but carried out
+            // already: answer as then, without moving the leg a second time.
+            tracing::info!(id = %ctx.message_id(), "redelivered command was carried out before; answering with its outcome");
+            return self.end(ctx, outcome);
+        }
         let run = {
             let mut state = self.lock();
-            start(&mut state, Instant::now())
+            let run = start(&mut state, Instant::now());
+            if let Some(p) = &self.persistence {
+                let mut p = p.lock().unwrap_or_else(|e| e.into_inner());
+                if let Err(e) = p.record(ctx.message_id(), &run.outcome, state.saved()) {
+                    tracing::error!(error = %e, "cannot save the controller's state; a restart would lose this move");
+                }
+            }
+            run
         };
         tracing::debug!(
             simulated_s = run.simulated.as_secs_f64(),
@@ -184,7 +217,22 @@ impl Shared {
         self.lock().settle(Instant::now());
         // On the bus's simulated time (if the module uses it) the move took this long.
         ctx.spend(run.simulated);
-        let Err(failure) = run.outcome else {
+        self.end(ctx, run.outcome)
+    }
+
+    /// The outcome of this command if a Controller carried it out already.
+    fn already_done(&self, ctx: &Context) -> Option<Result<(), Failure>> {
+        if ctx.redelivery() == 0 {
+            return None;
+        }
+        let p = self.persistence.as_ref()?;
+        let p = p.lock().unwrap_or_else(|e| e.into_inner());
+        p.outcome_of(ctx.message_id()).cloned()
+    }
+
+    /// Ends a command: raises a failure's exception in its context, then fails.
+    fn end(&self, ctx: &Context, outcome: Result<(), Failure>) -> Result<(), HandlerError> {
+        let Err(failure) = outcome else {
             return Ok(());
         };
         let raised = match &failure.exception {

@@ -99,6 +99,8 @@ pub async fn connect(connector: &Connector, config: GaitConfig) -> Result<Module
     let builder = Module::builder(config.module_name.clone())
         .capacity(config.capacity)
         .simulated_time(config.simulated_time)
+        // A module that dies while answering one of our queries is restarted; ask again.
+        .requery_after_crash(tca_module::REQUERIES_AFTER_CRASH)
         .handle(move |ctx: Context, step: PlanStep| {
             let shared = shared.clone();
             async move { shared.plan_step(&ctx, step).await }

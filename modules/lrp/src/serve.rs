@@ -100,6 +100,8 @@ pub async fn connect(connector: &Connector, config: LrpConfig) -> Result<Module,
     tracing::info!(module = %config.module_name, "leg recovery planner starting");
     Module::builder(config.module_name.clone())
         .simulated_time(config.simulated_time)
+        // A module that dies while answering one of our queries is restarted; ask again.
+        .requery_after_crash(tca_module::REQUERIES_AFTER_CRASH)
         .handle({
             let shared = shared.clone();
             move |ctx: Context, goal: RecoverLeg| {

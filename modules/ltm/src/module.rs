@@ -2,6 +2,10 @@
 //! the request asks for a refresh, or no image has been merged yet, it first asks the ISM for
 //! an image (`acquireImage`) of the configured sensor and merges it. A bad region is refused
 //! before any image is taken.
+//!
+//! With a store directory of its own ([`LtmConfig::store_dir`]) the map's tiles are written
+//! there after every merge: an LTM Manager killed and started again on the same directory
+//! answers from the map the dead one had built.
 
 use std::sync::{Arc, Mutex};
 
@@ -26,6 +30,8 @@ pub async fn connect_with_map(
     let map = Arc::new(Mutex::new(map));
     Module::builder("ltm")
         .simulated_time(simulated_time)
+        // A module that dies while answering one of our queries is restarted; ask again.
+        .requery_after_crash(tca_module::REQUERIES_AFTER_CRASH)
         .handle(move |ctx, request: MapRegion| {
             let map = map.clone();
             async move { map_region(&ctx, map, request).await }
@@ -58,7 +64,14 @@ async fn map_region(
         let map = map.clone();
         let began = std::time::Instant::now();
         let report = tokio::task::spawn_blocking(move || {
-            lock(&map)?.add_image(&image).map_err(HandlerError::from)
+            let mut map = lock(&map)?;
+            let report = map.add_image(&image).map_err(HandlerError::from)?;
+            // With a store directory of its own, the map on disk is kept current, so a
+            // restarted LTM Manager opens the map this one had built.
+            if map.config().store_dir.is_some() {
+                map.flush().map_err(HandlerError::from)?;
+            }
+            Ok::<_, HandlerError>(report)
         })
         .await
         .map_err(|e| HandlerError::new(format!("map building did not finish: {e}")))??;

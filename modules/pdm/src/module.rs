@@ -41,6 +41,8 @@ pub async fn connect(connector: &Connector, config: PdmConfig) -> Result<Module,
     let simulated_time = config.simulated_time;
     Module::builder("pdm")
         .simulated_time(simulated_time)
+        // A module that dies while answering one of our queries is restarted; ask again.
+        .requery_after_crash(tca_module::REQUERIES_AFTER_CRASH)
         .handle(move |ctx, request: RenderMap| {
             let config = config.clone();
             async move {

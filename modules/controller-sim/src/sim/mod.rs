@@ -71,6 +71,24 @@ pub enum StartPose {
     },
 }
 
+/// The dynamic state of a [`LegSimulator`] ([`LegSimulator::state`]), saved so a restarted
+/// Controller finds the leg where it was.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SimState {
+    /// The carriage.
+    pub carriage: CarriagePose,
+    /// The joints.
+    pub joints: JointPosition,
+    /// Where the planted foot is pinned (world frame, metres), if it stands.
+    pub planted: Option<[f64; 3]>,
+    /// Horizontal ground force on the foot (carriage axes), newtons.
+    pub lateral_force_n: [f64; 2],
+    /// Transition force set point, newtons.
+    pub trans_force_n: f64,
+    /// Simulated clock, nanoseconds.
+    pub clock_ns: u64,
+}
+
 /// The simulated leg, carriage and terrain behind the Controller interface.
 ///
 /// # Example
@@ -276,6 +294,30 @@ impl LegSimulator {
     /// Whether the foot stands on the ground.
     pub fn foot_planted(&self) -> bool {
         self.planted.is_some()
+    }
+
+    /// What changes as the leg moves (the terrain, parameters and faults are the
+    /// configuration's): enough to put a new simulator where this one is.
+    pub fn state(&self) -> SimState {
+        SimState {
+            carriage: self.carriage,
+            joints: self.joints,
+            planted: self.planted.map(|p| [p.x, p.y, p.z]),
+            lateral_force_n: self.lateral_force_n,
+            trans_force_n: self.trans_force_n,
+            clock_ns: u64::try_from(self.clock.as_nanos()).unwrap_or(u64::MAX),
+        }
+    }
+
+    /// Puts the leg, carriage, contact and clock where `state` says (from [`Self::state`] of a
+    /// simulator on the same terrain).
+    pub fn restore(&mut self, state: &SimState) {
+        self.carriage = state.carriage;
+        self.joints = state.joints;
+        self.planted = state.planted.map(|[x, y, z]| Point3::new(x, y, z));
+        self.lateral_force_n = state.lateral_force_n;
+        self.trans_force_n = state.trans_force_n;
+        self.clock = Duration::from_nanos(state.clock_ns);
     }
 
     /// Ground truth (not part of the Controller interface): where the foot sole centre
