@@ -5,6 +5,7 @@
 //!
 //! - [`builtin`]: modules built into the command (`tca module NAME`): the echo used by
 //!   `tca ping`.
+//! - [`chaos`]: `tca chaos`: walks while modules are killed and restarted, audited.
 //! - [`launch`]: launch files for `tca up`.
 //! - [`map`]: `tca map`: map pictures from a running system or a traffic log.
 //! - [`ping`]: timing query round trips through central.
@@ -13,6 +14,7 @@
 //! - [`walk`]: `tca walk`: the walking system assembled, walked, and reported.
 
 pub mod builtin;
+pub mod chaos;
 pub mod launch;
 pub mod map;
 pub mod ping;

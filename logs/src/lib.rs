@@ -16,9 +16,11 @@
 //! - [`stats`]: the Figure 18 breakdown (computing, waiting, idle per module), latencies.
 //! - [`export`]: a JSON-encoded copy of a log for Foxglove Studio.
 //! - [`script`]: what one module did in a recorded run, as a script to play it back.
+//! - [`audit`](mod@audit): lost and doubly handled messages, proved from the log.
 //! - [`compare`](mod@compare): comparing what modules sent in two runs, field by field (`tca log replay`).
 //! - [`error`][]: [`LogError`].
 
+pub mod audit;
 pub mod compare;
 pub mod error;
 pub mod export;
@@ -30,6 +32,7 @@ pub mod show;
 pub mod stats;
 pub mod writer;
 
+pub use audit::{Audit, audit};
 pub use compare::{Comparison, Difference, Divergence, Rules, Side, compare};
 pub use error::{LogError, Result};
 pub use export::export_json;

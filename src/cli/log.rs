@@ -19,6 +19,17 @@ pub(crate) enum LogCommand {
     Stats(StatsArgs),
     /// Replay a recorded walk with some modules played from the log; report the first divergence.
     Replay(super::replay::ReplayArgs),
+    /// Prove from the log that no message was lost or handled twice (exit 1 if one was).
+    Audit(AuditArgs),
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct AuditArgs {
+    /// The log file (of a run that ended cleanly; a crashed central's log ends mid-flight).
+    file: PathBuf,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Debug, Args)]
@@ -77,6 +88,26 @@ pub(crate) struct ShowArgs {
 pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
     match cmd {
         LogCommand::Replay(args) => super::replay::run(args).await,
+        LogCommand::Audit(args) => {
+            let log = LogFile::open(&args.file)
+                .with_context(|| format!("cannot read log {}", args.file.display()))?;
+            let audit = tca_logs::audit(&log);
+            if args.json {
+                println!("{}", serde_json::to_string(&audit)?);
+            } else {
+                print!("{}", tca::chaos::audit_text(&audit));
+                if let Some(t) = &log.truncated {
+                    println!(
+                        "note: the log ends early ({t}); messages in flight then show as lost"
+                    );
+                }
+            }
+            Ok(if audit.is_clean() {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(1)
+            })
+        }
         LogCommand::Export(args) => {
             let log = LogFile::open(&args.file)
                 .with_context(|| format!("cannot read log {}", args.file.display()))?;

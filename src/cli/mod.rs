@@ -1,6 +1,7 @@
 //! Command-line parsing and the subcommands.
 
 mod central;
+mod chaos;
 mod log;
 mod map;
 mod module;
@@ -43,6 +44,8 @@ enum Command {
     /// Read traffic logs.
     #[command(subcommand)]
     Log(log::LogCommand),
+    /// Walk with the modules as processes while killing them at random; audit the log.
+    Chaos(chaos::ChaosArgs),
     /// Draw a terrain map (elevation, uncertainty, footfall, slope) to PNG, from a running
     /// system or a traffic log.
     Map(map::MapArgs),
@@ -93,6 +96,7 @@ pub(crate) fn main() -> ExitCode {
     let result = runtime.block_on(async move {
         match cli.command {
             Command::Walk(args) => walk::run(args).await,
+            Command::Chaos(args) => chaos::run(args).await,
             Command::Central(args) => central::run(args).await,
             Command::Module(args) => module::run(args).await,
             Command::Up(args) => up::run(args).await,

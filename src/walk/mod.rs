@@ -165,6 +165,9 @@ pub async fn walk(
     let (steps_tx, mut steps_rx) = mpsc::unbounded_channel();
     let progress_for_steps = progress.clone();
     let walker = Module::builder(format!("walker-{}", std::process::id()))
+        // The latest walker takes the step reports over (an earlier `tca walk --connect` on
+        // the same system registered them too).
+        .replace(true)
         .simulated_time(true)
         // A module that dies while answering one of our queries is restarted; ask again.
         .requery_after_crash(tca_module::REQUERIES_AFTER_CRASH)

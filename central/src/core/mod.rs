@@ -17,6 +17,7 @@
 
 mod event;
 mod exceptions;
+mod late;
 mod links;
 mod monitors;
 mod permissions;
@@ -64,6 +65,8 @@ pub struct Central {
     folded: HashMap<String, MessageName>,
     queries: HashMap<MessageId, OpenQuery>,
     tasks: HashMap<MessageId, Box<Task>>,
+    /// Answers that may come late without anyone being at fault.
+    late: late::LateAnswers,
     node_task: HashMap<u64, MessageId>,
     tree: Tree,
     attachments: exceptions::Attachments,
@@ -131,6 +134,7 @@ impl Central {
             registry: BTreeMap::new(),
             folded: HashMap::default(),
             queries: HashMap::default(),
+            late: late::LateAnswers::default(),
             tasks: HashMap::default(),
             node_task: HashMap::default(),
             tree: Tree::default(),
@@ -230,7 +234,22 @@ impl Central {
                 return;
             }
         };
-        self.cause_stamp = envelope.timestamp_ns;
+        // What central sends because of this envelope carries its time (simulated time when
+        // modules run on it). Hellos and registrations (stamped with the wall clock before the
+        // module knows any other time), and requests that release no task (registry, tree,
+        // goodbye: tools on the wall clock send them while simulated walks run) must not move
+        // anyone's clock.
+        if !matches!(
+            envelope.name.as_str(),
+            names::HELLO
+                | names::HELLO_AUTH
+                | names::REGISTER
+                | names::REGISTRY
+                | names::TREE
+                | names::BYE
+        ) {
+            self.cause_stamp = envelope.timestamp_ns;
+        }
         let frame = if envelope.name.as_str() == names::HELLO_AUTH {
             // Never write a secret to the log.
             permissions::redacted_hello(&envelope).unwrap_or_default()

@@ -88,8 +88,12 @@ impl Central {
     ) {
         match self.queries.get(&query_id) {
             Some(q) if q.handler == module => {}
+            Some(_) | None if self.late.take(query_id, &module) => {
+                tracing::debug!(%module, %query_id, "answer to a query whose asker went down; dropped");
+                return;
+            }
             Some(_) | None => {
-                // Late answers (the asker gave up or died) are logged and dropped.
+                // Other late answers (the asker gave up) are reported and dropped.
                 let reason = format!(
                     "{} answers query {query_id}, which is not open for module {module}",
                     envelope.class
@@ -112,7 +116,16 @@ impl Central {
     /// Every query a module was handling, or held for it, fails at once when it goes down.
     pub(super) fn fail_queries_of(&mut self, module: &ModuleName, out: &mut Vec<Action>) {
         // Queries the dead module asked: nobody waits for their answers any more.
-        self.queries.retain(|_, q| &q.asker != module);
+        let orphaned: Vec<(MessageId, ModuleName)> = self
+            .queries
+            .iter()
+            .filter(|(_, q)| &q.asker == module)
+            .map(|(id, q)| (*id, q.handler.clone()))
+            .collect();
+        for (id, handler) in orphaned {
+            self.queries.remove(&id);
+            self.late.expect(id, handler);
+        }
         // Queries sent to the dead module: tell each asker now.
         let held: std::collections::HashSet<MessageId> = self
             .modules

@@ -219,6 +219,10 @@ impl Central {
             };
             return self.exception_done(module, id, outcome, out);
         }
+        if self.late.take(id, &module) {
+            tracing::debug!(%module, %id, "end of a task that was stopped while its handler ran; dropped");
+            return;
+        }
         let Some(task) = self.tasks.get(&id) else {
             let reason = format!("{} ends {id}, which is not a live task", envelope.class);
             return self.problem(Some(link), Some(module), reason, &[], out);
@@ -296,6 +300,8 @@ impl Central {
             }
             task.envelope.node = Some(NodeId(node));
             task.envelope.timestamp_ns = task.envelope.timestamp_ns.max(self.cause_stamp);
+            // Delivered (again): its end is expected, not late.
+            self.late.take(id, &task.handler);
             self.send(link, &task.envelope, out);
             self.tasks.insert(id, task);
             self.tree_events(events, out);
@@ -418,6 +424,8 @@ impl Central {
             return;
         }
         task.running = false;
+        // Its handler may end it before the cancel arrives.
+        self.late.expect(id, handler.clone());
         let Some(state) = self.modules.get_mut(&handler) else {
             return;
         };
