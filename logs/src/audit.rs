@@ -283,3 +283,225 @@ fn ended_nodes(ops: &[TreeOp]) -> HashSet<NodeId> {
     }
     ended
 }
+
+#[cfg(test)]
+mod tests {
+    use bytes::Bytes;
+    use tca_messages::{MessageId, MessageName, SendOptions, encode};
+    use tca_task_tree::{NodeKind, NodeSpec, Outcome};
+
+    use super::*;
+    use crate::record::{FrameRecord, LinkRecord, LogRecord, TreeRecord};
+
+    /// Builds a log record by record.
+    #[derive(Default)]
+    struct Log(Vec<LogRecord>);
+
+    fn module(name: &str) -> ModuleName {
+        ModuleName::new(name).unwrap()
+    }
+
+    impl Log {
+        fn push(&mut self, kind: RecordKind) -> &mut Self {
+            self.0.push(LogRecord {
+                at_ns: self.0.len() as u64,
+                kind,
+            });
+            self
+        }
+
+        #[allow(clippy::too_many_arguments)]
+        fn frame(
+            &mut self,
+            direction: Direction,
+            peer: &str,
+            class: Class,
+            id: MessageId,
+            sender: &str,
+            correlation: Option<MessageId>,
+            redelivery: u32,
+        ) -> &mut Self {
+            let envelope = Envelope {
+                id,
+                class,
+                name: MessageName::new("work").unwrap(),
+                sender: module(sender),
+                context: None,
+                node: None,
+                correlation,
+                timestamp_ns: 0,
+                options: SendOptions::default(),
+                redelivery,
+                data: Vec::new(),
+            };
+            self.push(RecordKind::Frame(FrameRecord {
+                direction,
+                link: 1,
+                peer: Some(module(peer)),
+                name: envelope.name.clone(),
+                class,
+                frame: Bytes::from(encode(&envelope).unwrap()),
+            }))
+        }
+
+        fn closed(&mut self, who: &str) -> &mut Self {
+            self.push(RecordKind::Link(LinkRecord {
+                link: 1,
+                event: LinkEvent::Closed,
+                module: Some(module(who)),
+                detail: String::new(),
+            }))
+        }
+
+        fn tree(&mut self, op: TreeOp, message: Option<MessageId>) -> &mut Self {
+            self.push(RecordKind::Tree(TreeRecord {
+                op,
+                message: message.map(|m| m.0),
+            }))
+        }
+
+        fn audit(&self) -> Audit {
+            audit(&LogFile {
+                path: "test.mcap".into(),
+                records: self.0.clone(),
+                formats: HashMap::new(),
+                truncated: None,
+            })
+        }
+    }
+
+    const Q: MessageId = MessageId(7);
+
+    fn asked(log: &mut Log) {
+        log.frame(Direction::In, "gait", Class::Query, Q, "gait", None, 0)
+            .frame(Direction::Out, "ltm", Class::Query, Q, "gait", None, 0)
+            .frame(
+                Direction::In,
+                "ltm",
+                Class::Reply,
+                MessageId(9),
+                "ltm",
+                Some(Q),
+                0,
+            );
+    }
+
+    #[test]
+    fn an_answered_query_is_clean_and_an_unanswered_one_is_lost() {
+        let mut log = Log::default();
+        asked(&mut log);
+        let unanswered = log.audit();
+        assert_eq!(unanswered.queries, 1);
+        assert_eq!(unanswered.lost.len(), 1, "{unanswered:?}");
+        assert!(unanswered.lost[0].contains("never answered"));
+        log.frame(
+            Direction::Out,
+            "gait",
+            Class::Reply,
+            MessageId(9),
+            "ltm",
+            Some(Q),
+            0,
+        );
+        assert!(log.audit().is_clean(), "{:?}", log.audit());
+    }
+
+    #[test]
+    fn a_query_whose_asker_died_is_not_lost() {
+        let mut log = Log::default();
+        asked(&mut log);
+        log.closed("gait");
+        assert!(log.audit().is_clean(), "{:?}", log.audit());
+    }
+
+    /// A goal that enters, gets node `node`, is delivered (maybe twice) and ends.
+    fn goal(log: &mut Log, handler_dies_between: bool) -> Audit {
+        let g = MessageId(11);
+        let node = tca_task_tree::TaskTree::new().next_id();
+        log.frame(Direction::In, "gait", Class::Goal, g, "gait", None, 0)
+            .tree(
+                TreeOp::AddNode {
+                    id: node,
+                    spec: NodeSpec::new(NodeKind::Goal, "work", "lrp"),
+                    now: 1,
+                },
+                Some(g),
+            )
+            .tree(TreeOp::Start { node, now: 2 }, Some(g))
+            .frame(Direction::Out, "lrp", Class::Goal, g, "gait", None, 0);
+        if handler_dies_between {
+            log.closed("lrp");
+        }
+        log.frame(Direction::Out, "lrp", Class::Goal, g, "gait", None, 1)
+            .frame(
+                Direction::In,
+                "lrp",
+                Class::Success,
+                MessageId(12),
+                "lrp",
+                Some(g),
+                0,
+            )
+            .tree(
+                TreeOp::Finish {
+                    node,
+                    outcome: Outcome::Success,
+                    now: 3,
+                },
+                Some(g),
+            );
+        log.audit()
+    }
+
+    #[test]
+    fn a_goal_delivered_again_after_its_handler_died_is_clean() {
+        let audit = goal(&mut Log::default(), true);
+        assert!(audit.is_clean(), "{audit:?}");
+        assert_eq!((audit.tasks, audit.redelivered), (1, 1));
+    }
+
+    #[test]
+    fn a_goal_delivered_twice_to_a_live_handler_was_handled_twice() {
+        let audit = goal(&mut Log::default(), false);
+        assert_eq!(audit.handled_twice.len(), 1, "{audit:?}");
+        assert!(audit.handled_twice[0].contains("had not gone down"));
+    }
+
+    #[test]
+    fn a_goal_with_no_node_and_no_error_is_lost() {
+        let mut log = Log::default();
+        log.frame(
+            Direction::In,
+            "gait",
+            Class::Goal,
+            MessageId(5),
+            "gait",
+            None,
+            0,
+        );
+        let audit = log.audit();
+        assert_eq!(audit.lost.len(), 1, "{audit:?}");
+        assert!(audit.lost[0].contains("neither a task node nor an error"));
+    }
+
+    #[test]
+    fn two_ends_of_one_goal_were_handled_twice() {
+        let mut log = Log::default();
+        let g = MessageId(11);
+        goal(&mut log, true);
+        log.frame(
+            Direction::In,
+            "lrp",
+            Class::Success,
+            MessageId(13),
+            "lrp",
+            Some(g),
+            0,
+        );
+        let audit = log.audit();
+        assert!(
+            audit.handled_twice.iter().any(|d| d.contains("2 ends")),
+            "{audit:?}"
+        );
+    }
+}

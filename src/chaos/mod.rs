@@ -53,6 +53,8 @@ pub struct ChaosOptions {
     pub listen: Option<String>,
     /// The `tca` executable to start modules with.
     pub exe: PathBuf,
+    /// The modules that may be killed (all six walking modules if empty).
+    pub victims: Vec<String>,
 }
 
 /// One kill.
@@ -117,6 +119,16 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
     let started = Instant::now();
     if options.walks == 0 {
         anyhow::bail!("--walks must be at least 1");
+    }
+    if let Some(v) = options
+        .victims
+        .iter()
+        .find(|v| !WALKING_MODULES.contains(&v.as_str()))
+    {
+        anyhow::bail!(
+            "{v:?} is not a walking module; the modules that can be killed are {}",
+            WALKING_MODULES.join(", ")
+        );
     }
     std::fs::create_dir_all(&options.out)
         .with_context(|| format!("cannot create {}", options.out.display()))?;
@@ -232,12 +244,17 @@ async fn one_walk(
     .context("the walking modules did not all register within 30 s")?;
 
     // When to kill: after which step, how long after it, which module.
+    let victims: Vec<usize> = (0..WALKING_MODULES.len())
+        .filter(|i| {
+            options.victims.is_empty() || options.victims.iter().any(|v| v == WALKING_MODULES[*i])
+        })
+        .collect();
     let mut plan: Vec<(usize, u64, usize)> = (0..wanted)
         .map(|_| {
             (
                 rng.random_range(0..=KILL_WINDOW_STEPS),
                 rng.random_range(0..=40u64),
-                rng.random_range(0..WALKING_MODULES.len()),
+                victims[rng.random_range(0..victims.len())],
             )
         })
         .collect();

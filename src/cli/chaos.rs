@@ -16,6 +16,9 @@ pub(crate) struct ChaosArgs {
     /// Module kills (SIGKILL, then a restart) to make across the walks.
     #[arg(long, default_value_t = 5)]
     kills: usize,
+    /// Only kill these modules (comma-separated; default: any of the six walking modules).
+    #[arg(long, value_delimiter = ',', value_name = "MODULE,...")]
+    victims: Vec<String>,
     /// Obstacle course 1, 2, 3 or 4, or "random" (from --seed).
     #[arg(long, default_value = "3", conflicts_with = "terrain")]
     course: String,
@@ -60,6 +63,7 @@ pub(crate) async fn run(args: ChaosArgs) -> anyhow::Result<ExitCode> {
         out: args.out.clone(),
         listen: args.listen.clone(),
         exe: std::env::current_exe().context("cannot find the tca executable")?,
+        victims: args.victims.clone(),
     };
     let report = tca::chaos::run(&options, |line| eprintln!("{line}")).await?;
     print!("{}", tca::chaos::summary(&report));
