@@ -4,9 +4,11 @@
 //! [central]
 //! listen = ["tcp/127.0.0.1:7447"]   # zenoh endpoints (default tcp/127.0.0.1:7447)
 //! log = "out/traffic.mcap"          # optional traffic log
+//! policy = "policy.toml"            # optional: who may connect and what they may do
 //!
 //! [[module]]
 //! name = "echo"                     # a built-in module: runs `tca module echo --connect ...`
+//! restart = true                    # started again if it crashes (the default)
 //!
 //! [[module]]
 //! name = "my-planner"               # or any program; it gets TCA_CONNECT=<endpoint>
@@ -38,6 +40,8 @@ pub struct CentralSection {
     pub listen: Vec<String>,
     /// Traffic log file.
     pub log: Option<PathBuf>,
+    /// Policy file (authentication, authorisation, limits), as `tca central --policy`.
+    pub policy: Option<PathBuf>,
 }
 
 impl Default for CentralSection {
@@ -45,6 +49,7 @@ impl Default for CentralSection {
         CentralSection {
             listen: default_listen(),
             log: None,
+            policy: None,
         }
     }
 }
@@ -64,6 +69,14 @@ pub struct ModuleSection {
     /// Extra arguments for the built-in module.
     #[serde(default)]
     pub args: Vec<String>,
+    /// Start the module again when its process dies other than by exiting cleanly (with a
+    /// growing pause between attempts). Default true.
+    #[serde(default = "yes")]
+    pub restart: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl Launch {
@@ -112,6 +125,14 @@ mod tests {
         .unwrap();
         assert_eq!(l.modules.len(), 1);
         assert_eq!(l.central.listen, vec!["tcp/127.0.0.1:7500"]);
+        assert!(l.modules[0].restart, "modules restart by default");
+        assert_eq!(l.central.policy, None);
+        let l = Launch::parse(
+            "[central]\npolicy=\"p.toml\"\n[[module]]\nname=\"echo\"\nrestart=false\n",
+        )
+        .unwrap();
+        assert!(!l.modules[0].restart);
+        assert_eq!(l.central.policy, Some(PathBuf::from("p.toml")));
     }
 
     #[test]

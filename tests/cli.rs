@@ -24,6 +24,30 @@ fn stderr(out: &std::process::Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
+/// The process ids with which module `echo` connected, from central's log so far.
+fn echo_pids(log: &std::path::Path) -> Vec<u32> {
+    let Ok(file) = tca_logs::LogFile::open(log) else {
+        return Vec::new();
+    };
+    file.records
+        .iter()
+        .filter_map(|r| match &r.kind {
+            tca_logs::RecordKind::Link(l)
+                if l.event == tca_logs::LinkEvent::Connected
+                    && l.module.as_ref().is_some_and(|m| m.as_str() == "echo") =>
+            {
+                l.detail
+                    .strip_prefix("pid ")?
+                    .split(' ')
+                    .next()?
+                    .parse()
+                    .ok()
+            }
+            _ => None,
+        })
+        .collect()
+}
+
 #[test]
 fn ping_in_process_prints_json() {
     let out = tca(&["ping", "-n", "200", "--json"]);
@@ -76,6 +100,27 @@ async fn up_starts_central_and_modules_that_the_other_commands_reach() {
             .await
             .unwrap();
     assert!(out.status.success(), "{}", stderr(&out));
+    // A module that crashes is started again by `tca up`, and answers again.
+    let first = echo_pids(&log);
+    assert_eq!(first.len(), 1, "{first:?}");
+    let _ = Command::new("kill")
+        .args(["-KILL", &first[0].to_string()])
+        .status();
+    retry("echo started again", || async {
+        let pids = echo_pids(&log);
+        if pids.len() >= 2 {
+            Ok(())
+        } else {
+            Err(format!("echo pids so far: {pids:?}"))
+        }
+    })
+    .await;
+    let e = endpoint.clone();
+    let out =
+        tokio::task::spawn_blocking(move || tca(&["ping", "--connect", &e, "-n", "20", "--json"]))
+            .await
+            .unwrap();
+    assert!(out.status.success(), "after the restart: {}", stderr(&out));
     let e = endpoint.clone();
     let out = tokio::task::spawn_blocking(move || tca(&["tree", "--connect", &e]))
         .await

@@ -55,6 +55,8 @@ pub struct ChaosOptions {
     pub exe: PathBuf,
     /// The modules that may be killed (all six walking modules if empty).
     pub victims: Vec<String>,
+    /// Plan the next step while the current one executes.
+    pub concurrent: bool,
 }
 
 /// One kill.
@@ -263,7 +265,11 @@ async fn one_walk(
         terrain: options.terrain.clone(),
         goal_y_m: None,
         backward: false,
-        mode: tca_messages::walking::WalkMode::Sequential,
+        mode: if options.concurrent {
+            tca_messages::walking::WalkMode::Concurrent
+        } else {
+            tca_messages::walking::WalkMode::Sequential
+        },
         seed: options.seed,
         out: None,
         step_pictures: false,

@@ -16,6 +16,9 @@ pub(crate) struct ChaosArgs {
     /// Module kills (SIGKILL, then a restart) to make across the walks.
     #[arg(long, default_value_t = 5)]
     kills: usize,
+    /// Plan the next step while the current one executes (§3.3).
+    #[arg(long)]
+    concurrent: bool,
     /// Only kill these modules (comma-separated; default: any of the six walking modules).
     #[arg(long, value_delimiter = ',', value_name = "MODULE,...")]
     victims: Vec<String>,
@@ -64,6 +67,7 @@ pub(crate) async fn run(args: ChaosArgs) -> anyhow::Result<ExitCode> {
         listen: args.listen.clone(),
         exe: std::env::current_exe().context("cannot find the tca executable")?,
         victims: args.victims.clone(),
+        concurrent: args.concurrent,
     };
     let report = tca::chaos::run(&options, |line| eprintln!("{line}")).await?;
     print!("{}", tca::chaos::summary(&report));
