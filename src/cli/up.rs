@@ -51,7 +51,6 @@ pub(crate) async fn run(args: UpArgs) -> anyhow::Result<ExitCode> {
             policy,
             ..CentralConfig::default()
         },
-        ..StartOptions::default()
     })
     .await
     .context("cannot start central")?;
