@@ -237,10 +237,14 @@ async fn one_walk(
     for name in WALKING_MODULES {
         modules.push(ModuleProcess::start(setup, name, &state)?);
     }
-    wait_until(watcher, Duration::from_secs(30), |connected| {
-        WALKING_MODULES
-            .iter()
-            .all(|m| connected.iter().any(|c| c == m))
+    wait_until(watcher, Duration::from_secs(30), |registry| {
+        WALKING_MODULES.iter().all(|m| {
+            registry.modules.iter().any(|c| c.as_str() == *m)
+                && registry
+                    .entries
+                    .iter()
+                    .any(|e| e.handler.as_str() == *m && e.connected)
+        })
     })
     .await
     .context("the walking modules did not all register within 30 s")?;
@@ -348,8 +352,8 @@ async fn kill_and_restart(module: &mut ModuleProcess, watcher: &Module) -> anyho
     let killed = Instant::now();
     module.kill().await;
     let name = module.name.clone();
-    wait_until(watcher, Duration::from_secs(10), |connected| {
-        !connected.iter().any(|c| c == &name)
+    wait_until(watcher, Duration::from_secs(10), |registry| {
+        !registry.modules.iter().any(|c| c.as_str() == name)
     })
     .await
     .with_context(|| format!("central did not notice that {name} died"))?;
@@ -357,20 +361,20 @@ async fn kill_and_restart(module: &mut ModuleProcess, watcher: &Module) -> anyho
     Ok(killed.elapsed().as_millis() as u64)
 }
 
-/// Polls central's registry until `ok` holds for the connected modules.
+/// Polls central's registry until `ok` holds for it.
 async fn wait_until(
     watcher: &Module,
     limit: Duration,
-    ok: impl Fn(&[String]) -> bool,
+    ok: impl Fn(&tca_messages::control::Registry) -> bool,
 ) -> anyhow::Result<()> {
     let deadline = Instant::now() + limit;
     loop {
         let registry = watcher.registry().await?;
-        let connected: Vec<String> = registry.modules.iter().map(|m| m.to_string()).collect();
-        if ok(&connected) {
+        if ok(&registry) {
             return Ok(());
         }
         if Instant::now() > deadline {
+            let connected: Vec<String> = registry.modules.iter().map(|m| m.to_string()).collect();
             anyhow::bail!("timed out; connected now: {}", connected.join(", "));
         }
         tokio::time::sleep(Duration::from_millis(10)).await;

@@ -199,7 +199,10 @@ impl ModuleBuilder {
         let (hello_name, hello_data) = hello_payload(hello, credentials)?;
         let hello_env = bootstrap(&name, hello_name, MessageId::new(0, 0), hello_data.clone())?;
         link.tx.send(encode(&hello_env)?.into())?;
-        let answer = next_answer(&mut link.rx, hello_env.id, connector).await?;
+        // Central may deliver messages waiting for this module as soon as it is welcomed,
+        // before the registration is answered: they are kept and handled first.
+        let mut early = Vec::new();
+        let answer = next_answer(&mut link.rx, hello_env.id, connector, &mut early).await?;
         let welcome: Welcome = match answer.class {
             Class::Control => decode_data(&answer.data)?,
             _ => {
@@ -224,7 +227,7 @@ impl ModuleBuilder {
         let register = encode_data(&register)?;
         let reg_env = bootstrap(&name, names::REGISTER, reg_id, register.clone())?;
         link.tx.send(encode(&reg_env)?.into())?;
-        let answer = next_answer(&mut link.rx, reg_id, connector).await?;
+        let answer = next_answer(&mut link.rx, reg_id, connector, &mut early).await?;
         if answer.class != Class::Reply {
             let reason = decode_data::<RouteError>(&answer.data)
                 .map(|e| e.to_string())
@@ -267,16 +270,19 @@ impl ModuleBuilder {
             link.rx,
             link.presence,
             rejoiner,
+            early,
         ));
         Ok(module)
     }
 }
 
-/// Waits for central's answer to a bootstrap message.
+/// Waits for central's answer to a bootstrap message, keeping whatever else arrives first in
+/// `early`.
 async fn next_answer(
     rx: &mut tokio::sync::mpsc::UnboundedReceiver<bytes::Bytes>,
     id: MessageId,
     connector: &Connector,
+    early: &mut Vec<Envelope>,
 ) -> Result<Envelope> {
     let deadline = tokio::time::Instant::now() + CONNECT_TIMEOUT;
     loop {
@@ -293,6 +299,7 @@ async fn next_answer(
         if envelope.correlation == Some(id) {
             return Ok(envelope);
         }
+        early.push(envelope);
     }
 }
 

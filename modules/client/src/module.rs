@@ -602,6 +602,7 @@ impl Module {
         mut rx: mpsc::UnboundedReceiver<Bytes>,
         mut presence: Option<mpsc::UnboundedReceiver<Presence>>,
         mut rejoiner: Option<Rejoiner>,
+        early: Vec<Envelope>,
     ) {
         let upgrade = |shared: &std::sync::Weak<Shared>| {
             shared.upgrade().map(|shared| Module {
@@ -610,6 +611,12 @@ impl Module {
                 clock: None,
             })
         };
+        // What central delivered while the module was still registering comes first.
+        if let Some(module) = upgrade(&shared) {
+            for envelope in early {
+                module.on_envelope(envelope);
+            }
+        }
         loop {
             let deadline = rejoiner.as_ref().and_then(Rejoiner::deadline);
             tokio::select! {
@@ -626,6 +633,11 @@ impl Module {
                     match rejoiner.as_mut().map(|r| r.on_envelope(&module, &envelope)) {
                         None | Some(Verdict::Handle) => module.on_envelope(envelope),
                         Some(Verdict::Consumed) => {}
+                        Some(Verdict::Online(held)) => {
+                            for envelope in held {
+                                module.on_envelope(envelope);
+                            }
+                        }
                         Some(Verdict::Refused(reason)) => {
                             tracing::error!(module = %module.shared.name, %reason, "central refused this module when it rejoined; it stops");
                             break;

@@ -62,6 +62,9 @@ enum Phase {
 pub(crate) struct Rejoiner {
     greeting: Greeting,
     phase: Phase,
+    /// Envelopes central sent between its welcome and the registration's answer: handled
+    /// once the module is online again, never dropped.
+    held: Vec<Envelope>,
 }
 
 /// What the receive loop should do with an envelope after the rejoiner saw it.
@@ -71,6 +74,8 @@ pub(crate) enum Verdict {
     Handle,
     /// Consumed by the handshake, or stale while offline: drop it.
     Consumed,
+    /// Registered again: handle these envelopes (held during the registration) now.
+    Online(Vec<Envelope>),
     /// Central refused the module on rejoining: the module cannot serve any more.
     Refused(String),
 }
@@ -80,6 +85,7 @@ impl Rejoiner {
         Rejoiner {
             greeting,
             phase: Phase::Online,
+            held: Vec::new(),
         }
     }
 
@@ -164,7 +170,8 @@ impl Rejoiner {
             }
             Phase::Register { id, .. } => {
                 if envelope.correlation != Some(id) {
-                    tracing::debug!(name = %envelope.name, "dropped while registering again");
+                    // Central may deliver before it answers the registration: keep it.
+                    self.held.push(envelope.clone());
                     return Verdict::Consumed;
                 }
                 if envelope.class != Class::Reply {
@@ -175,7 +182,7 @@ impl Rejoiner {
                         tracing::info!(module = %module.name(), link = id.link(), "rejoined central: registered again");
                         self.phase = Phase::Online;
                         module.go_online();
-                        Verdict::Consumed
+                        Verdict::Online(std::mem::take(&mut self.held))
                     }
                     Ok(outcome) => Verdict::Refused(
                         outcome
@@ -192,6 +199,7 @@ impl Rejoiner {
     }
 
     fn say_hello(&mut self, module: &Module, attempt: u32) {
+        self.held.clear();
         let wait = FIRST_RETRY
             .saturating_mul(1 << attempt.min(8))
             .min(LONGEST_RETRY);
