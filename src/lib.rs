@@ -7,6 +7,8 @@
 //!   `tca ping`.
 //! - [`chaos`]: `tca chaos`: walks while modules are killed and restarted, audited.
 //! - [`launch`]: launch files for `tca up`.
+//! - [`load`]: load on central: many modules exchanging queries, goals and informs, every
+//!   message accounted for (the load benchmark and its CI check).
 //! - [`map`]: `tca map`: map pictures from a running system or a traffic log.
 //! - [`ping`]: timing query round trips through central.
 //! - [`replay`]: `tca log replay`: a recorded walk run again with modules played from its log.
@@ -16,6 +18,7 @@
 pub mod builtin;
 pub mod chaos;
 pub mod launch;
+pub mod load;
 pub mod map;
 pub mod ping;
 pub mod replay;

@@ -11,7 +11,7 @@ use crate::policy::Policy;
 ///
 /// # Resource limits
 ///
-/// Two layers keep one module from hurting the others:
+/// Three layers keep one module from hurting the others, and central's memory bounded:
 ///
 /// - **Inbox** (`max_inbox_frames`, `max_inbox_bytes`): frames a link has sent that central has
 ///   not handled yet. Central serves links' inboxes in turn (round robin), so a flooding module
@@ -24,6 +24,17 @@ use crate::policy::Policy;
 ///   capacity, messages held for a handler that is down), counted against the *sender*. A send
 ///   past either limit is refused with `OverLimit`; the module may send again once central has
 ///   delivered some.
+/// - **Outbox** (`max_outbox_frames`, `max_outbox_bytes`): frames central has sent to a link
+///   that the link has not taken yet (a slow module). Central never waits for a link: at half
+///   either limit it gives that module no new work (goals and commands stay queued in central,
+///   queries and informs are held for it, all counted against their senders' queue limits, so
+///   the senders meet over-limit refusals) until the module has read its outbox down to a
+///   quarter. Past the limit, which only a module that does not read the answers to its own
+///   requests reaches, the module is disconnected as too slow (logged, told in a last error
+///   frame, and treated as any module that went down). One frame always fits an empty outbox.
+/// - **Log** (`max_log_backlog`): records waiting for the traffic-log writer. When the writer
+///   falls that far behind, central takes no frames from modules until it is back under half;
+///   the frames wait in the inboxes above.
 ///
 /// # Authentication and authorisation
 ///
@@ -55,6 +66,16 @@ pub struct CentralConfig {
     pub max_queued_messages: u32,
     /// Most data bytes of those held messages, per sending module.
     pub max_queued_bytes: u64,
+    /// Most frames sent to one link and not yet taken by it (its outbox); central stops
+    /// giving the module new work at half of this and disconnects it past it.
+    pub max_outbox_frames: u32,
+    /// Most bytes of those frames, with the same two marks.
+    pub max_outbox_bytes: u64,
+    /// Most records handed to the traffic-log writer and not yet written. At this many,
+    /// central stops taking frames from modules (they wait in the modules' inboxes, so modules
+    /// meet over-limit refusals) until the writer is back under half: the log's pace is
+    /// central's.
+    pub max_log_backlog: u32,
     /// Who may connect, register and send (None: everyone may do everything).
     #[serde(skip)]
     pub policy: Option<Arc<Policy>>,
@@ -73,6 +94,12 @@ impl Default for CentralConfig {
             max_inbox_bytes: 64 << 20,
             max_queued_messages: 1 << 18,
             max_queued_bytes: 256 << 20,
+            // A module that keeps reading stays far below this; one that stops costs central
+            // at most ~64 MB before it is disconnected.
+            max_outbox_frames: 1 << 16,
+            max_outbox_bytes: 64 << 20,
+            // About 20 to 30 MB of records (each holds its frame).
+            max_log_backlog: 1 << 17,
             policy: None,
         }
     }

@@ -59,6 +59,17 @@ struct State {
     /// The driver knows this inbox has something (a `Ready` was sent and not yet served dry).
     scheduled: bool,
     closed: bool,
+    /// The most frames and bytes waiting at once.
+    high: (u64, u64),
+}
+
+impl State {
+    fn queue(&mut self, frame: Bytes) {
+        self.bytes += frame.len() as u64;
+        self.frames.push_back(frame);
+        self.high.0 = self.high.0.max(self.frames.len() as u64);
+        self.high.1 = self.high.1.max(self.bytes);
+    }
 }
 
 /// One link's inbox.
@@ -123,8 +134,7 @@ impl Inbox {
         if let Some(used) = self.over(&s, frame.len()) {
             return Err(CentralError::Refused(self.refusal(used)));
         }
-        s.bytes += frame.len() as u64;
-        s.frames.push_back(frame);
+        s.queue(frame);
         self.schedule(&mut s)
     }
 
@@ -135,10 +145,7 @@ impl Inbox {
             return;
         }
         match self.over(&s, frame.len()) {
-            None => {
-                s.bytes += frame.len() as u64;
-                s.frames.push_back(frame);
-            }
+            None => s.queue(frame),
             // A refused frame is kept as its header only (data dropped), so each costs about a
             // hundred bytes; past MAX_REFUSALS they are only counted.
             Some(used) if s.refused.len() < MAX_REFUSALS => {
@@ -190,6 +197,11 @@ impl Inbox {
             s.scheduled = false;
         }
         (item, more)
+    }
+
+    /// The most frames and bytes that have waited in this inbox at once.
+    pub(crate) fn high_water(&self) -> (u64, u64) {
+        self.lock().high
     }
 
     /// Stops accepting frames (the link closed).

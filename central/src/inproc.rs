@@ -10,6 +10,7 @@ use tokio::sync::mpsc;
 
 use crate::core::{Event, LinkId};
 use crate::inbox::Inbox;
+use crate::outbox::FrameReceiver;
 use crate::runtime::Input;
 
 /// A module's end of an in-process link. Dropping it closes the link, as a crash would.
@@ -18,7 +19,7 @@ pub struct InProcLink {
     link: LinkId,
     to_central: mpsc::UnboundedSender<Input>,
     inbox: Arc<Inbox>,
-    from_central: Option<mpsc::UnboundedReceiver<Bytes>>,
+    from_central: Option<FrameReceiver>,
 }
 
 impl InProcLink {
@@ -26,7 +27,7 @@ impl InProcLink {
         link: LinkId,
         to_central: mpsc::UnboundedSender<Input>,
         inbox: Arc<Inbox>,
-        from_central: mpsc::UnboundedReceiver<Bytes>,
+        from_central: FrameReceiver,
     ) -> Self {
         InProcLink {
             link,
@@ -49,8 +50,9 @@ impl InProcLink {
         }
     }
 
-    /// Takes the receiver of frames from central (once).
-    pub fn take_receiver(&mut self) -> Option<mpsc::UnboundedReceiver<Bytes>> {
+    /// Takes the receiver of frames from central (once). Keep reading it: frames not taken
+    /// count against the link's outbox limits (`max_outbox_frames`, `max_outbox_bytes`).
+    pub fn take_receiver(&mut self) -> Option<FrameReceiver> {
         self.from_central.take()
     }
 }

@@ -14,6 +14,8 @@
 //!   carries out its actions; [`CentralHandle`] to connect in-process modules and inspect it.
 //! - `inbox`: each link's bounded inbox of frames not yet handled, served round robin so a
 //!   flooding module delays only itself.
+//! - [`outbox`]: each link's bounded outbox of frames sent and not yet taken; a module that
+//!   does not keep up gets no new work, and one that stops reading is disconnected.
 //! - [`inproc`]: the in-process transport (tokio channels), the embedded default.
 //! - [`zenoh_transport`]: the zenoh transport: central as a zenoh router, modules as clients;
 //!   key-expression conventions shared with the module library.
@@ -22,6 +24,7 @@ pub mod config;
 pub mod core;
 mod inbox;
 pub mod inproc;
+pub mod outbox;
 pub mod policy;
 pub mod runtime;
 pub mod zenoh_transport;
@@ -29,8 +32,9 @@ pub mod zenoh_transport;
 pub use config::CentralConfig;
 pub use core::{Action, Central, Event, LinkId};
 pub use inproc::InProcLink;
+pub use outbox::FrameReceiver;
 pub use policy::{Policy, PolicyError};
-pub use runtime::{CentralHandle, RunningCentral, StartOptions, Stats, start};
+pub use runtime::{CentralHandle, HighWater, RunningCentral, StartOptions, Stats, start};
 
 /// Errors of central's runtime.
 #[derive(Debug, thiserror::Error)]

@@ -1,5 +1,10 @@
 //! The async driver around the core: one task owns the [`Central`] state machine, every link
 //! feeds one channel, and the driver carries out the actions (send, log, close).
+//!
+//! The driver never waits for a link: frames for a link go into its outbox (see
+//! [`crate::outbox`]), whose level the driver measures when the core asks and reports when a
+//! watched one drains; the core decides what a slow module gets. Nor does it wait for the log
+//! writer: while that is `max_log_backlog` records behind, frames stay in the inboxes.
 
 use std::collections::{HashMap, VecDeque};
 use std::path::PathBuf;
@@ -13,9 +18,10 @@ use tca_messages::{ModuleName, now_ns};
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 
-use crate::core::{Action, Central, Counters, Event, LinkId};
+use crate::core::{Action, Central, Counters, Event, LinkId, OutboxUse};
 use crate::inbox::{Inbox, Taken};
 use crate::inproc::InProcLink;
+use crate::outbox::{FrameReceiver, Gauge, OutboxLimits};
 use crate::zenoh_transport::ZenohCentral;
 use crate::{CentralConfig, CentralError, Result};
 
@@ -25,10 +31,13 @@ use crate::{CentralConfig, CentralError, Result};
 pub(crate) enum Input {
     /// An event for the core (not `Frame`: frames come through inboxes).
     Event(Event),
-    /// A new link, where to send its frames and its inbox (precedes its `Opened` event).
-    Attach(LinkId, mpsc::UnboundedSender<Bytes>, Arc<Inbox>),
+    /// A new link, where to send its frames (and the gauge of that outbox) and its inbox
+    /// (precedes its `Opened` event).
+    Attach(LinkId, mpsc::UnboundedSender<Bytes>, Arc<Gauge>, Arc<Inbox>),
     /// The inbox of a link has frames to handle.
     Ready(LinkId),
+    /// The watched outbox of a congested link was read down to a quarter of its bound.
+    Drained(LinkId),
     /// A request for statistics.
     Inspect(oneshot::Sender<Stats>),
     /// Stop.
@@ -46,6 +55,34 @@ pub struct Stats {
     pub live_nodes: usize,
     /// The task trees as text.
     pub tree: String,
+    /// The most central's bounded queues have held since it started.
+    pub high_water: HighWater,
+    /// Times central stopped taking frames from modules until its log writer caught up
+    /// (`max_log_backlog`).
+    pub log_waits: u64,
+}
+
+/// The most each of central's bounded queues has held at once since it started: the largest
+/// of any one link (inbox, outbox) or any one sender (queued), frames and bytes each on their
+/// own. Compare with the limits in [`CentralConfig`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct HighWater {
+    /// Frames a link sent that waited for central to handle them (`max_inbox_frames`).
+    pub inbox_frames: u64,
+    /// Their bytes (`max_inbox_bytes`).
+    pub inbox_bytes: u64,
+    /// Frames central sent to a link that waited for the link to take them
+    /// (`max_outbox_frames`).
+    pub outbox_frames: u64,
+    /// Their bytes (`max_outbox_bytes`).
+    pub outbox_bytes: u64,
+    /// Messages of one sender held in central (`max_queued_messages`).
+    pub queued_messages: u64,
+    /// Their data bytes (`max_queued_bytes`).
+    pub queued_bytes: u64,
+    /// Log records handed to the log writer and not yet written (`max_log_backlog`, which
+    /// one batch of the driver's may pass).
+    pub log_records: u64,
 }
 
 /// A cheap, cloneable handle to a running central.
@@ -54,6 +91,7 @@ pub struct CentralHandle {
     tx: mpsc::UnboundedSender<Input>,
     next_link: Arc<AtomicU32>,
     inbox_limits: (u32, u64),
+    outbox_limits: OutboxLimits,
 }
 
 impl CentralHandle {
@@ -64,18 +102,19 @@ impl CentralHandle {
     }
 
     /// Opens a link: its number, its inbox and the receiver of what central sends on it.
-    pub(crate) fn attach(&self) -> Result<(LinkId, Arc<Inbox>, mpsc::UnboundedReceiver<Bytes>)> {
+    pub(crate) fn attach(&self) -> Result<(LinkId, Arc<Inbox>, FrameReceiver)> {
         let link = self.allocate_link();
         let (sink, from_central) = mpsc::unbounded_channel();
+        let gauge = Arc::new(Gauge::new(link, self.outbox_limits, self.tx.clone()));
         let (frames, bytes) = self.inbox_limits;
         let inbox = Arc::new(Inbox::new(link, frames, bytes, self.tx.clone()));
         self.tx
-            .send(Input::Attach(link, sink, inbox.clone()))
+            .send(Input::Attach(link, sink, gauge.clone(), inbox.clone()))
             .map_err(|_| CentralError::Stopped)?;
         self.tx
             .send(Input::Event(Event::Opened(link)))
             .map_err(|_| CentralError::Stopped)?;
-        Ok((link, inbox, from_central))
+        Ok((link, inbox, FrameReceiver::metered(from_central, gauge)))
     }
 
     /// Central's current statistics.
@@ -155,6 +194,10 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
             options.config.max_inbox_frames,
             options.config.max_inbox_bytes,
         ),
+        outbox_limits: OutboxLimits::new(
+            options.config.max_outbox_frames,
+            options.config.max_outbox_bytes,
+        ),
     };
     let log = match &options.log {
         Some(path) => Some(LogSink::create(path)?),
@@ -170,8 +213,10 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
             .and_then(|p| p.zenoh_users_file().map(|f| f.to_owned()));
         Some(ZenohCentral::start(&options.listen, users.as_deref(), handle.clone()).await?)
     };
+    let limits = handle.outbox_limits;
+    let max_log_backlog = options.config.max_log_backlog.max(1) as usize;
     let core = Central::new(options.config);
-    let task = tokio::spawn(drive(core, rx, log));
+    let task = tokio::spawn(drive(core, limits, max_log_backlog, rx, log));
     Ok(RunningCentral {
         handle,
         task,
@@ -182,15 +227,45 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
 /// Most inputs handled between two hand-overs to the log writer.
 const MAX_BATCH: usize = 512;
 
+/// How often central, waiting for its log writer to catch up, looks again.
+const LOG_WAIT_POLL: Duration = Duration::from_millis(1);
+
+/// Where the driver sends a link's frames.
+struct Sink {
+    tx: mpsc::UnboundedSender<Bytes>,
+    /// The level of that outbox.
+    gauge: Arc<Gauge>,
+    /// The core was told the outbox went past its bound (the link is closing).
+    full: bool,
+}
+
+/// Something the core must hear once the actions at hand are carried out.
+#[derive(Debug)]
+enum FollowUp {
+    /// The level of a link's outbox, measured then (with every frame just sent in it).
+    Measure(LinkId),
+    /// A link's outbox went past its bound.
+    Full(LinkId, OutboxUse),
+}
+
 /// What the driver owns besides the core.
 struct Driver {
     core: Central,
-    sinks: HashMap<LinkId, mpsc::UnboundedSender<Bytes>>,
+    sinks: HashMap<LinkId, Sink>,
+    limits: OutboxLimits,
     inboxes: HashMap<LinkId, Arc<Inbox>>,
     /// Links whose inboxes have something, served one item each in turn.
     ring: VecDeque<LinkId>,
     actions: Vec<Action>,
+    /// What carrying out actions called for (outbox measurements), done next.
+    follow: VecDeque<FollowUp>,
     records: Vec<tca_logs::LogRecord>,
+    /// Outbox high-water marks, and inbox ones of links that closed.
+    high: HighWater,
+    /// The log writer is behind: frames wait in the inboxes until it catches up.
+    log_wait: bool,
+    /// Times that happened.
+    log_waits: u64,
     stop: bool,
 }
 
@@ -200,22 +275,29 @@ impl Driver {
         match input {
             Input::Event(Event::Closed(link)) => {
                 // Everything the link sent before it closed is handled first.
-                if let Some(inbox) = self.inboxes.remove(&link) {
+                if let Some(inbox) = self.inboxes.get(&link).cloned() {
                     while let (Some(item), _) = inbox.take() {
                         self.item(now, link, item);
                     }
-                    inbox.close();
                 }
+                self.forget_inbox(link);
+                self.sinks.remove(&link);
                 self.event(now, Event::Closed(link));
             }
             Input::Event(event) => self.event(now, event),
-            Input::Attach(link, sink, inbox) => {
+            Input::Attach(link, tx, gauge, inbox) => {
+                let sink = Sink {
+                    tx,
+                    gauge,
+                    full: false,
+                };
                 self.sinks.insert(link, sink);
                 self.inboxes.insert(link, inbox);
             }
             Input::Ready(link) => self.ring.push_back(link),
+            Input::Drained(link) => self.drained(now, link),
             Input::Inspect(reply) => {
-                let _ = reply.send(stats(&self.core));
+                let _ = reply.send(self.stats());
             }
             Input::Shutdown => self.stop = true,
         }
@@ -253,59 +335,162 @@ impl Driver {
     }
 
     /// Hands an event to the core and carries out the actions at once, so closes and sends
-    /// keep their order.
+    /// keep their order; then what those actions called for (outbox levels), likewise.
     fn event(&mut self, now: u64, event: Event) {
+        self.carry_out(now, event);
+        while let Some(follow) = self.follow.pop_front() {
+            let event = match follow {
+                FollowUp::Measure(link) => match self.sinks.get(&link) {
+                    Some(sink) => Event::OutboxLevel(link, sink.gauge.measure()),
+                    None => continue,
+                },
+                FollowUp::Full(link, used) => Event::OutboxFull(link, used),
+            };
+            self.carry_out(now, event);
+        }
+    }
+
+    /// Hands one event to the core and carries out its actions, in order.
+    fn carry_out(&mut self, now: u64, event: Event) {
         self.core.handle(now, event, &mut self.actions);
         for action in self.actions.drain(..) {
             match action {
                 Action::Send(link, frame) => {
-                    if let Some(sink) = self.sinks.get(&link) {
-                        // A closed sink means the module is gone; its Closed event follows.
-                        let _ = sink.send(frame);
+                    if let Some(sink) = self.sinks.get_mut(&link) {
+                        let (limits, high, follow) =
+                            (self.limits, &mut self.high, &mut self.follow);
+                        send(sink, link, frame, limits, high, follow);
                     }
                 }
                 Action::Log(record) => self.records.push(record),
                 Action::Close(link) => {
                     self.sinks.remove(&link);
                     if let Some(inbox) = self.inboxes.remove(&link) {
+                        fold_inbox(&mut self.high, &inbox);
                         inbox.close();
                     }
                 }
+                Action::Measure(link) => self.follow.push_back(FollowUp::Measure(link)),
             }
         }
     }
+
+    /// A watched outbox was read down: the core hears its level (and may give the module
+    /// work again).
+    fn drained(&mut self, now: u64, link: LinkId) {
+        let Some(sink) = self.sinks.get(&link) else {
+            return;
+        };
+        if sink.full {
+            return;
+        }
+        let used = sink.gauge.measure();
+        self.event(now, Event::OutboxLevel(link, used));
+    }
+
+    /// Removes a link's inbox, keeping its high-water mark.
+    fn forget_inbox(&mut self, link: LinkId) {
+        if let Some(inbox) = self.inboxes.remove(&link) {
+            fold_inbox(&mut self.high, &inbox);
+            inbox.close();
+        }
+    }
+
+    fn stats(&self) -> Stats {
+        let mut s = stats(&self.core);
+        let mut high = self.high;
+        for inbox in self.inboxes.values() {
+            fold_inbox(&mut high, inbox);
+        }
+        let queued = self.core.queued_high_water();
+        high.queued_messages = queued.messages;
+        high.queued_bytes = queued.bytes;
+        s.high_water = high;
+        s.log_waits = self.log_waits;
+        s
+    }
 }
 
-/// The driver loop.
+/// Puts a frame into a link's outbox, noting the level it reaches; past the bound the core
+/// hears of it (and disconnects the module).
+fn send(
+    sink: &mut Sink,
+    link: LinkId,
+    frame: Bytes,
+    limits: OutboxLimits,
+    high: &mut HighWater,
+    follow: &mut VecDeque<FollowUp>,
+) {
+    let (frames, bytes) = sink.gauge.added(frame.len());
+    if sink.tx.send(frame).is_err() {
+        // The receiver is gone: the module is gone; its Closed event follows.
+        return;
+    }
+    high.outbox_frames = high.outbox_frames.max(frames);
+    high.outbox_bytes = high.outbox_bytes.max(bytes);
+    if sink.full {
+        return;
+    }
+    if limits.over(frames, bytes) {
+        sink.full = true;
+        follow.push_back(FollowUp::Full(link, OutboxUse { frames, bytes }));
+    }
+}
+
+fn fold_inbox(high: &mut HighWater, inbox: &Inbox) {
+    let (frames, bytes) = inbox.high_water();
+    high.inbox_frames = high.inbox_frames.max(frames);
+    high.inbox_bytes = high.inbox_bytes.max(bytes);
+}
+
+/// The driver loop. While the log writer is `max_log_backlog` records behind, frames are
+/// left in the inboxes (bounded: modules meet over-limit refusals) until it is back under half;
+/// everything else (links opening and closing, statistics, deadlines) goes on.
 async fn drive(
     core: Central,
+    limits: OutboxLimits,
+    max_log_backlog: usize,
     mut rx: mpsc::UnboundedReceiver<Input>,
     mut log: Option<LogSink>,
 ) -> Result<Stats> {
     let mut d = Driver {
         core,
         sinks: HashMap::new(),
+        limits,
         inboxes: HashMap::new(),
         ring: VecDeque::new(),
         actions: Vec::with_capacity(256),
+        follow: VecDeque::new(),
         records: Vec::new(),
+        high: HighWater::default(),
+        log_wait: false,
+        log_waits: 0,
         stop: false,
     };
     while !d.stop {
-        if d.ring.is_empty() {
-            // Idle: sleep until an input or the core's next deadline.
-            let first = match d.core.next_deadline() {
-                Some(at) => {
-                    let wait = Duration::from_nanos(at.saturating_sub(now_ns()));
-                    match tokio::time::timeout(wait, rx.recv()).await {
-                        Ok(input) => input,
-                        Err(_) => Some(Input::Event(Event::Tick)),
-                    }
-                }
-                None => rx.recv().await,
+        if d.ring.is_empty() || d.log_wait {
+            // Idle (or waiting for the log writer): sleep until an input, the core's next
+            // deadline (handled below) or the next look at the log writer.
+            let deadline = d
+                .core
+                .next_deadline()
+                .map(|at| Duration::from_nanos(at.saturating_sub(now_ns())));
+            let wait = match (deadline, d.log_wait) {
+                (Some(w), true) => Some(w.min(LOG_WAIT_POLL)),
+                (None, true) => Some(LOG_WAIT_POLL),
+                (w, false) => w,
+            };
+            let first = match wait {
+                Some(w) => match tokio::time::timeout(w, rx.recv()).await {
+                    Ok(input) => input.map(Some),
+                    Err(_) => Some(None),
+                },
+                None => rx.recv().await.map(Some),
             };
             let Some(first) = first else { break };
-            d.input(now_ns(), first);
+            if let Some(input) = first {
+                d.input(now_ns(), input);
+            }
         } else {
             // Busy: let other tasks (transports, modules in this process) run between batches.
             tokio::task::yield_now().await;
@@ -321,18 +506,28 @@ async fn drive(
             handled += 1;
         }
         if !d.stop {
-            d.serve(now, MAX_BATCH);
+            if !d.log_wait {
+                d.serve(now, MAX_BATCH);
+            }
             if d.core.next_deadline().is_some_and(|at| at <= now) {
                 d.event(now, Event::Tick);
             }
         }
         if let Some(l) = log.as_mut() {
             l.append_batch(std::mem::take(&mut d.records));
+            let backlog = l.backlog();
+            d.high.log_records = d.high.log_records.max(backlog as u64);
+            if backlog >= max_log_backlog {
+                d.log_waits += u64::from(!d.log_wait);
+                d.log_wait = true;
+            } else if backlog <= max_log_backlog / 2 {
+                d.log_wait = false;
+            }
         } else {
             d.records.clear();
         }
     }
-    let final_stats = stats(&d.core);
+    let final_stats = d.stats();
     drop(d);
     if let Some(l) = log {
         l.finish()?;
@@ -346,5 +541,7 @@ fn stats(core: &Central) -> Stats {
         modules: core.connected_modules(),
         live_nodes: core.live_nodes(),
         tree: core.render_tree(),
+        high_water: HighWater::default(),
+        log_waits: 0,
     }
 }

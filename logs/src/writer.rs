@@ -6,7 +6,8 @@ use rustc_hash::FxHashMap as HashMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
-use std::sync::mpsc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, mpsc};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -215,6 +216,8 @@ enum SinkInput {
 pub struct LogSink {
     tx: mpsc::Sender<SinkInput>,
     thread: Option<JoinHandle<Result<()>>>,
+    /// Records queued and not yet written.
+    backlog: Arc<AtomicUsize>,
 }
 
 impl LogSink {
@@ -222,14 +225,22 @@ impl LogSink {
     pub fn create(path: &Path) -> Result<Self> {
         let writer = LogWriter::create(path)?;
         let (tx, rx) = mpsc::channel();
+        let backlog = Arc::new(AtomicUsize::new(0));
+        let written = backlog.clone();
         let thread = std::thread::Builder::new()
             .name("tca-log".into())
-            .spawn(move || run_sink(writer, rx))
+            .spawn(move || run_sink(writer, rx, &written))
             .map_err(|e| LogError::WriterGone(e.to_string()))?;
         Ok(LogSink {
             tx,
             thread: Some(thread),
+            backlog,
         })
+    }
+
+    /// Records queued and not yet written: what the writer thread has still to do.
+    pub fn backlog(&self) -> usize {
+        self.backlog.load(Ordering::Relaxed)
     }
 
     /// Queues a record.
@@ -242,7 +253,10 @@ impl LogSink {
         if records.is_empty() {
             return;
         }
+        let count = records.len();
+        self.backlog.fetch_add(count, Ordering::Relaxed);
         if self.tx.send(SinkInput::Records(records)).is_err() {
+            self.backlog.fetch_sub(count, Ordering::Relaxed);
             tracing::error!("log writer thread has stopped; traffic is no longer logged");
         }
     }
@@ -268,7 +282,11 @@ impl Drop for LogSink {
     }
 }
 
-fn run_sink(mut writer: LogWriter, rx: mpsc::Receiver<SinkInput>) -> Result<()> {
+fn run_sink(
+    mut writer: LogWriter,
+    rx: mpsc::Receiver<SinkInput>,
+    backlog: &AtomicUsize,
+) -> Result<()> {
     let mut dirty = false;
     let mut last_flush = Instant::now();
     let mut finishing = false;
@@ -293,6 +311,7 @@ fn run_sink(mut writer: LogWriter, rx: mpsc::Receiver<SinkInput>) -> Result<()> 
                             tracing::error!(error = %e, "cannot write log record");
                         }
                     }
+                    backlog.fetch_sub(records.len(), Ordering::Relaxed);
                     dirty = true;
                 }
                 SinkInput::Finish => finishing = true,

@@ -44,6 +44,17 @@ pub(crate) struct CentralArgs {
     /// Most data bytes of one sender's messages held in central.
     #[arg(long, default_value_t = CentralConfig::default().max_queued_bytes)]
     max_queued_bytes: u64,
+    /// Most frames sent to one module and not yet read by it: at half, central gives it no
+    /// new work until it has read them down; past it, the module is disconnected as too slow.
+    #[arg(long, default_value_t = CentralConfig::default().max_outbox_frames)]
+    max_outbox_frames: u32,
+    /// Most bytes of the frames sent to one module and not yet read by it (same two marks).
+    #[arg(long, default_value_t = CentralConfig::default().max_outbox_bytes)]
+    max_outbox_bytes: u64,
+    /// Most log records waiting for the log writer; at this many central stops taking frames
+    /// from modules until the writer is back under half.
+    #[arg(long, default_value_t = CentralConfig::default().max_log_backlog)]
+    max_log_backlog: u32,
 }
 
 pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
@@ -62,6 +73,9 @@ pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
             max_inbox_bytes: args.max_inbox_bytes,
             max_queued_messages: args.max_queued_messages,
             max_queued_bytes: args.max_queued_bytes,
+            max_outbox_frames: args.max_outbox_frames,
+            max_outbox_bytes: args.max_outbox_bytes,
+            max_log_backlog: args.max_log_backlog,
             policy,
             ..CentralConfig::default()
         },

@@ -23,12 +23,28 @@ pub enum Event {
     InboxFull(LinkId, Bytes, InboxUse),
     /// Frames the link sent while its inbox and its refusal queue were full: dropped unanswered.
     InboxDropped(LinkId, u64),
+    /// How many frames sent to the link it has not taken yet (its outbox), as measured after
+    /// an [`Action::Measure`] or when a watched outbox drained. At half of `max_outbox_frames`
+    /// or `max_outbox_bytes` or more the link is congested and the driver watches it: another
+    /// report follows once the link has taken it down to a quarter.
+    OutboxLevel(LinkId, OutboxUse),
+    /// The link's outbox went past its bound: the module is disconnected as too slow.
+    OutboxFull(LinkId, OutboxUse),
 }
 
 /// How full a link's inbox was when a frame was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct InboxUse {
     /// Frames waiting.
+    pub frames: u64,
+    /// Their bytes.
+    pub bytes: u64,
+}
+
+/// How full a link's outbox is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct OutboxUse {
+    /// Frames not yet taken by the link.
     pub frames: u64,
     /// Their bytes.
     pub bytes: u64,
@@ -43,4 +59,7 @@ pub enum Action {
     Log(LogRecord),
     /// Close a link (after a refused hello or a protocol violation).
     Close(LinkId),
+    /// Measure the link's outbox and report it as [`Event::OutboxLevel`]: the frames central
+    /// counted out to it since the last report reached half its bound.
+    Measure(LinkId),
 }

@@ -15,7 +15,14 @@ impl Central {
         if self.links.contains_key(&link) {
             return;
         }
-        self.links.insert(link, Link { module: None });
+        self.links.insert(
+            link,
+            Link {
+                module: None,
+                congested: false,
+                unread: Default::default(),
+            },
+        );
         self.log_link(link, LinkEvent::Opened, None, String::new(), out);
     }
 

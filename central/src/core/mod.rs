@@ -12,9 +12,11 @@
 //! - `tasks`: goals and commands, the task tree, capacity and dispatch;
 //! - `waiting`: messages held for modules that are down, with their bounds;
 //! - `quota`: per-sender accounting of what central holds, and its limits;
+//! - `congestion`: modules that do not keep up with what central sends them (their outbox);
 //! - `permissions`: the registration policy applied to what a module sends;
 //! - `tree`: the adapter to `tca-task-tree`.
 
+mod congestion;
 mod event;
 mod exceptions;
 mod late;
@@ -45,10 +47,11 @@ use tca_messages::{
     encode_data,
 };
 
-pub use event::{Action, Event, InboxUse, LinkId};
+pub use event::{Action, Event, InboxUse, LinkId, OutboxUse};
 pub use quota::Usage;
 
 use crate::config::CentralConfig;
+use crate::outbox::OutboxLimits;
 use crate::policy::Grant;
 use registry::Entry;
 use routing::OpenQuery;
@@ -74,7 +77,11 @@ pub struct Central {
     monitors: Vec<monitors::MonitorState>,
     /// What each sending module has held in central (see `quota`).
     queued: HashMap<ModuleName, Usage>,
+    /// The most one sender has had held at once (messages and bytes, each on its own).
+    queued_high: Usage,
     central_name: ModuleName,
+    /// The marks of every link's outbox.
+    outbox_limits: OutboxLimits,
     seq: u32,
     now: u64,
     /// Timestamp of the envelope being handled: what it releases (a task whose constraints or
@@ -99,12 +106,22 @@ pub struct Counters {
     pub not_permitted: u64,
     /// Messages refused because their sender was over a resource limit.
     pub over_limit: u64,
+    /// Times a link's outbox reached half its bound, so that central held new work for its
+    /// module until the module had read it down.
+    pub congestions: u64,
+    /// Modules disconnected because their outbox went past its bound (they did not read).
+    pub too_slow: u64,
 }
 
 /// A transport link.
 #[derive(Debug)]
 struct Link {
     module: Option<ModuleName>,
+    /// Its outbox is at half its bound or more, or may be (see `congestion`): no new work goes
+    /// to it.
+    congested: bool,
+    /// Its outbox as last measured, plus every frame sent to it since: at least what it holds.
+    unread: OutboxUse,
 }
 
 /// What central knows of a module, connected or not.
@@ -127,6 +144,7 @@ struct ModuleState {
 impl Central {
     /// A central with the given configuration and no links.
     pub fn new(config: CentralConfig) -> Self {
+        let outbox_limits = OutboxLimits::new(config.max_outbox_frames, config.max_outbox_bytes);
         Central {
             config,
             links: HashMap::default(),
@@ -142,7 +160,9 @@ impl Central {
             exceptions: HashMap::default(),
             monitors: Vec::new(),
             queued: HashMap::default(),
+            queued_high: Usage::default(),
             central_name: ModuleName::new(CENTRAL).unwrap_or_else(|_| unreachable!()),
+            outbox_limits,
             seq: 0,
             now: 0,
             cause_stamp: 0,
@@ -174,6 +194,8 @@ impl Central {
             }
             Event::InboxFull(link, frame, used) => self.inbox_full(link, frame, used, out),
             Event::InboxDropped(link, count) => self.inbox_dropped(link, count, out),
+            Event::OutboxLevel(link, used) => self.outbox_level(link, used, out),
+            Event::OutboxFull(link, used) => self.outbox_full(link, used, out),
         }
     }
 
@@ -339,7 +361,9 @@ impl Central {
                 let peer = self.links.get(&link).and_then(|l| l.module.clone());
                 self.log_frame(Direction::Out, link, peer, envelope, frame.clone(), out);
                 self.counters.frames_out += 1;
+                let len = frame.len();
                 out.push(Action::Send(link, frame));
+                self.count_out(link, len, out);
             }
             Err(err) => self.problem(Some(link), None, err.to_string(), &[], out),
         }

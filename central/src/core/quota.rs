@@ -23,6 +23,12 @@ impl Central {
         self.queued.get(module).copied().unwrap_or_default()
     }
 
+    /// The most any one sender has had queued in central at once since central started
+    /// (messages and bytes, each the maximum on its own).
+    pub fn queued_high_water(&self) -> Usage {
+        self.queued_high
+    }
+
     /// Checks that `sender` may have one more message of `bytes` data bytes held.
     pub(super) fn check_quota(&self, sender: &ModuleName, bytes: usize) -> Result<(), RouteError> {
         if self.is_central(sender) {
@@ -58,6 +64,8 @@ impl Central {
         let u = self.queued.entry(sender.clone()).or_default();
         u.messages += 1;
         u.bytes = u.bytes.saturating_add(bytes as u64);
+        self.queued_high.messages = self.queued_high.messages.max(u.messages);
+        self.queued_high.bytes = self.queued_high.bytes.max(u.bytes);
     }
 
     /// A message held for `sender` was delivered or dropped.

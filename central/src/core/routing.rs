@@ -43,7 +43,8 @@ impl Central {
         self.deliver_or_wait(link, &handler, envelope, out);
     }
 
-    /// Sends to the handler if it is connected, else holds the message (within bounds).
+    /// Sends to the handler if it is connected and keeping up, else holds the message (within
+    /// bounds).
     fn deliver_or_wait(
         &mut self,
         sender_link: LinkId,
@@ -51,7 +52,7 @@ impl Central {
         envelope: Envelope,
         out: &mut Vec<Action>,
     ) {
-        match self.modules.get(handler).and_then(|m| m.link) {
+        match self.work_link(handler) {
             Some(hlink) => self.send(hlink, &envelope, out),
             None => {
                 if let Err(err) = self.hold(handler, Waiting::new(envelope.clone(), self.now)) {

@@ -257,13 +257,13 @@ impl Central {
         self.dispatch(&module, out);
     }
 
-    /// Starts ready tasks of `module` while it has capacity.
+    /// Starts ready tasks of `module` while it has capacity (and reads what it is sent).
     pub(super) fn dispatch(&mut self, module: &ModuleName, out: &mut Vec<Action>) {
         loop {
-            let Some(state) = self.modules.get_mut(module) else {
+            let Some(link) = self.work_link(module) else {
                 return;
             };
-            let Some(link) = state.link else {
+            let Some(state) = self.modules.get_mut(module) else {
                 return;
             };
             if state.running >= state.capacity {

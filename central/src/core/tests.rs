@@ -11,6 +11,10 @@ use tca_messages::*;
 
 use super::*;
 
+// Tests of slow links, with this file's harness.
+#[path = "congestion_tests.rs"]
+mod congestion;
+
 const MS: u64 = 1_000_000;
 
 #[derive(Serialize, Deserialize)]

@@ -1,6 +1,7 @@
 //! Messages held in central for a module that is down (§3.1: modules connect, crash and restart
 //! at will). Held messages are bounded by count (`max_waiting`) and age (`max_wait`); past either
-//! bound the sender gets an error that says so.
+//! bound the sender gets an error that says so. Messages for a module that is up but does not
+//! keep up (see `congestion`) are held here too, bounded by their senders' queue limits only.
 
 use tca_messages::{Class, Envelope, MessageName, ModuleName, RouteError};
 
@@ -84,29 +85,33 @@ impl Central {
         Ok(())
     }
 
-    /// Delivers what waited for `module`, now that it is connected and registered.
+    /// Delivers what waited for `module`, now that it is connected and registered (or has
+    /// read down its outbox).
     pub(super) fn deliver_waiting(&mut self, module: &ModuleName, out: &mut Vec<Action>) {
         let Some(state) = self.modules.get_mut(module) else {
             return;
         };
-        let Some(link) = state.link else {
-            return;
-        };
-        let held = std::mem::take(&mut state.waiting);
+        let mut held = std::mem::take(&mut state.waiting);
         let mut keep = std::collections::VecDeque::new();
-        for w in held {
+        while let Some(w) = held.pop_front() {
             let routed_here = self
                 .registry
                 .get(&w.envelope.name)
                 .is_some_and(|e| &e.handler == module);
-            if routed_here {
-                if w.charged {
-                    self.refund(&w.envelope.sender, w.envelope.data.len());
-                }
-                self.send(link, &w.envelope, out);
-            } else {
+            if !routed_here {
                 keep.push_back(w);
+                continue;
             }
+            // Each send may congest the link: the rest then waits for it to drain.
+            let Some(link) = self.work_link(module) else {
+                keep.push_back(w);
+                keep.append(&mut held);
+                break;
+            };
+            if w.charged {
+                self.refund(&w.envelope.sender, w.envelope.data.len());
+            }
+            self.send(link, &w.envelope, out);
         }
         if let Some(state) = self.modules.get_mut(module) {
             state.waiting = keep;

@@ -279,7 +279,7 @@ impl ModuleBuilder {
 /// Waits for central's answer to a bootstrap message, keeping whatever else arrives first in
 /// `early`.
 async fn next_answer(
-    rx: &mut tokio::sync::mpsc::UnboundedReceiver<bytes::Bytes>,
+    rx: &mut tca_central::FrameReceiver,
     id: MessageId,
     connector: &Connector,
     early: &mut Vec<Envelope>,

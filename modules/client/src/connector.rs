@@ -131,7 +131,7 @@ pub(crate) enum Presence {
 /// An open link.
 pub(crate) struct Link {
     pub(crate) tx: FrameTx,
-    pub(crate) rx: mpsc::UnboundedReceiver<Bytes>,
+    pub(crate) rx: tca_central::FrameReceiver,
     /// Central's comings and goings (zenoh only: an in-process central cannot die alone).
     pub(crate) presence: Option<mpsc::UnboundedReceiver<Presence>>,
     pub(crate) keep: Keep,
@@ -199,7 +199,7 @@ async fn open_zenoh(endpoints: &[String], login: Option<&ZenohLogin>) -> Result<
     });
     Ok(Link {
         tx: FrameTx::Zenoh(out_tx),
-        rx,
+        rx: rx.into(),
         presence: Some(presence),
         keep: Keep::Zenoh(ZenohLink {
             session,

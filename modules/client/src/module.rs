@@ -599,7 +599,7 @@ impl Module {
     /// ([`crate::rejoin`]).
     pub(crate) async fn receive_loop(
         shared: std::sync::Weak<Shared>,
-        mut rx: mpsc::UnboundedReceiver<Bytes>,
+        mut rx: tca_central::FrameReceiver,
         mut presence: Option<mpsc::UnboundedReceiver<Presence>>,
         mut rejoiner: Option<Rejoiner>,
         early: Vec<Envelope>,
