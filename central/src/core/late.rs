@@ -32,6 +32,10 @@ impl LateAnswers {
 
     /// Whether an answer to `id` from `module` was expected to be late (and forgets it).
     pub(super) fn take(&mut self, id: MessageId, module: &ModuleName) -> bool {
+        // Called for every task dispatched: nearly always with nothing remembered.
+        if self.by_id.is_empty() {
+            return false;
+        }
         if self.by_id.get(&id) == Some(module) {
             self.by_id.remove(&id);
             true

@@ -231,10 +231,17 @@ impl Module {
         timeout: Duration,
     ) -> Result<Q::Reply> {
         expect_class::<Q>(Class::Query)?;
-        let data = encode_data(query)?;
+        let mut data = Some(encode_data(query)?);
         let mut crashes = 0;
         let answer = loop {
-            let envelope = self.envelope(Class::Query, Q::NAME, data.clone(), None)?;
+            // Keep a copy only while the query may have to be sent again.
+            let payload = if crashes < self.shared.requery_after_crash {
+                data.clone()
+            } else {
+                data.take()
+            }
+            .unwrap_or_default();
+            let envelope = self.envelope(Class::Query, Q::NAME, payload, None)?;
             let answer = self.request(envelope, timeout).await?;
             if answer.class == Class::Error
                 && crashes < self.shared.requery_after_crash

@@ -3,21 +3,14 @@
 //! same error instead of hanging), keep retrying, and register again with the new central on
 //! the same endpoint, after which messages flow as before.
 
+mod common;
+
 use std::time::Duration;
 
+use common::{STEP, free_endpoint, within};
 use serde::{Deserialize, Serialize};
 use tca_central::{RunningCentral, StartOptions};
 use tca_module::{Connector, Module, ModuleError, SendOptions};
-
-/// Every await in a test is bounded by this.
-const STEP: Duration = Duration::from_secs(20);
-
-async fn within<T>(what: &str, f: impl std::future::Future<Output = T>) -> T {
-    match tokio::time::timeout(STEP, f).await {
-        Ok(v) => v,
-        Err(_) => panic!("timed out after {STEP:?}: {what}"),
-    }
-}
 
 /// Echo: a query answered with its argument.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -33,14 +26,6 @@ tca_messages::message!(Slow: query "slow" -> u64);
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Park;
 tca_messages::message!(Park: goal "park");
-
-fn free_endpoint() -> String {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .map(|a| a.port())
-        .unwrap();
-    format!("tcp/127.0.0.1:{port}")
-}
 
 async fn central_at(endpoint: &str) -> RunningCentral {
     tca_central::start(StartOptions {

@@ -4,27 +4,20 @@
 //! right zenoh login, never logs a secret, and throttles a flooding module while others keep
 //! talking. In-process and over zenoh where it applies.
 
+mod common;
+
 use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
+use common::{free_endpoint, within};
 use serde::{Deserialize, Serialize};
 use tca_central::policy::hash_secret;
 use tca_central::{CentralConfig, Policy, RunningCentral, StartOptions};
 use tca_messages::RouteError;
 use tca_messages::control::TaskOutcome;
 use tca_module::{Connector, Module, ModuleError, SendOptions};
-
-/// Every await in a test is bounded by this.
-const STEP: Duration = Duration::from_secs(20);
-
-async fn within<T>(what: &str, f: impl std::future::Future<Output = T>) -> T {
-    match tokio::time::timeout(STEP, f).await {
-        Ok(v) => v,
-        Err(_) => panic!("timed out after {STEP:?}: {what}"),
-    }
-}
 
 /// Echo: a query answered with its argument.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -74,14 +67,6 @@ fn policy_text(zenoh_users: Option<&Path>) -> String {
 
 fn policy(zenoh_users: Option<&Path>) -> Arc<Policy> {
     Arc::new(Policy::parse(Path::new("test-policy.toml"), &policy_text(zenoh_users)).unwrap())
-}
-
-fn free_endpoint() -> String {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .map(|a| a.port())
-        .unwrap();
-    format!("tcp/127.0.0.1:{port}")
 }
 
 async fn start(config: CentralConfig, zenoh: bool, log: Option<&Path>) -> (RunningCentral, String) {
