@@ -61,18 +61,14 @@ fn raw_tokio(c: &mut Criterion, rt: &Runtime) {
 fn raw_zenoh(c: &mut Criterion, rt: &Runtime) {
     let endpoint = free_endpoint();
     let (router, asker, _queryable) = rt.block_on(async {
-        let router = zenoh::open(
-            tca_central::zenoh_transport::router_config(std::slice::from_ref(&endpoint)).unwrap(),
-        )
-        .await
-        .unwrap();
+        let router =
+            zenoh::open(tca_link::zenoh::router_config(std::slice::from_ref(&endpoint)).unwrap())
+                .await
+                .unwrap();
         let client = || async {
-            zenoh::open(
-                tca_central::zenoh_transport::client_config(std::slice::from_ref(&endpoint))
-                    .unwrap(),
-            )
-            .await
-            .unwrap()
+            zenoh::open(tca_link::zenoh::client_config(std::slice::from_ref(&endpoint)).unwrap())
+                .await
+                .unwrap()
         };
         let answerer = client().await;
         let queryable = answerer
@@ -132,7 +128,7 @@ fn bus(rt: &Runtime, zenoh: bool) -> Bus {
         let connector = if zenoh {
             Connector::zenoh(endpoint)
         } else {
-            Connector::InProcess(central.handle())
+            Connector::from(central.in_process())
         };
         let echo = echo::connect(&connector, "echo").await.unwrap();
         let pinger = Module::builder("pinger").connect(&connector).await.unwrap();
@@ -193,7 +189,7 @@ fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
         let connector = if zenoh {
             Connector::zenoh(endpoint)
         } else {
-            Connector::InProcess(central.handle())
+            Connector::from(central.in_process())
         };
         let (count, target, notify) = (count.clone(), target.clone(), notify.clone());
         let sink = Module::builder("sink")

@@ -25,7 +25,7 @@ async fn main() -> anyhow::Result<()> {
         ..StartOptions::default()
     })
     .await?;
-    let connector = Connector::InProcess(central.handle());
+    let connector = Connector::from(central.in_process());
     let count = Arc::new(AtomicU64::new(0));
     let c = count.clone();
     let _sink = Module::builder("sink")

@@ -55,7 +55,7 @@ impl Default for CentralSection {
 }
 
 fn default_listen() -> Vec<String> {
-    vec![tca_central::zenoh_transport::DEFAULT_ENDPOINT.to_owned()]
+    vec![tca_central::DEFAULT_ENDPOINT.to_owned()]
 }
 
 /// `[[module]]`.

@@ -12,7 +12,7 @@ use tca::builtin::echo::{self, Ping};
 use tca_central::StartOptions;
 use tca_messages::control::TaskOutcome;
 use tca_messages::{Class, RouteError};
-use tca_module::{HandlerError, Module, ModuleError, SendOptions};
+use tca_module::{HandlerError, Module, ModuleError};
 
 /// Where the carriage is, in metres along the rails.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -96,25 +96,16 @@ async fn commands_are_handled_one_at_a_time_in_order() {
         )
         .await
         .unwrap();
-        let mut last = None;
-        for i in 0..8 {
-            let options = SendOptions {
-                notify: i == 7,
-                ..SendOptions::default()
+        for i in 0..7 {
+            let target = BodyMove {
+                target_y_m: f64::from(i),
             };
-            last = Some(
-                gait.send_task(
-                    &BodyMove {
-                        target_y_m: f64::from(i),
-                    },
-                    options,
-                )
-                .unwrap(),
-            );
+            gait.send_task(&target, []).unwrap();
         }
-        let outcome = within("last command", last.unwrap().outcome())
-            .await
+        let last = gait
+            .send_watched(&BodyMove { target_y_m: 7.0 }, [])
             .unwrap();
+        let outcome = within("last command", last.outcome()).await.unwrap();
         assert_eq!(outcome, TaskOutcome::Achieved);
         let expected: Vec<f64> = (0..8).map(f64::from).collect();
         assert_eq!(*moves.lock().unwrap(), expected, "{transport:?}");
@@ -141,15 +132,7 @@ async fn a_goal_handler_s_commands_become_its_children() {
         .connect(&central.connector)
         .await
         .unwrap();
-    let walk = user
-        .send_task(
-            &PlanStep { step: 3 },
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
-        )
-        .unwrap();
+    let walk = user.send_watched(&PlanStep { step: 3 }, []).unwrap();
     // The goal is achieved only once its child command is.
     let outcome = within("goal achieved", walk.outcome()).await.unwrap();
     assert_eq!(outcome, TaskOutcome::Achieved);
@@ -452,13 +435,7 @@ async fn a_clean_log_records_everything_and_shows_it() {
         .unwrap();
     gait.query(&BodyPosition).await.unwrap();
     let t = gait
-        .send_task(
-            &BodyMove { target_y_m: 2.0 },
-            SendOptions {
-                notify: true,
-                ..Default::default()
-            },
-        )
+        .send_watched(&BodyMove { target_y_m: 2.0 }, [])
         .unwrap();
     t.outcome().await.unwrap();
     central.stop().await;

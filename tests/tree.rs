@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 use tca_central::StartOptions;
 use tca_messages::control::TaskOutcome;
 use tca_messages::{ConstraintSpec, MessageId, NodeId, TaskRef, TimePoint};
-use tca_module::{HandlerError, Module, SendOptions, raise_action, send_action};
+use tca_module::{HandlerError, Module, raise_action, send_action};
 use tca_task_tree::TreeOp;
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -134,36 +134,22 @@ async fn figure5_modules(central: &TestCentral, fail_step: Option<u32>, sim: boo
                     .insert(p.step, (ctx.node().unwrap(), p.clone()));
                 work(&ctx, PLAN).await;
                 // In concurrent mode the leg may not move before the previous body move ends.
-                let mut leg_options = SendOptions::default();
-                if let Some(prev) = p.previous_body_move {
-                    leg_options
-                        .constraints
-                        .push(ConstraintSpec::sequential_achievement(
-                            TaskRef::Message(prev),
-                            TaskRef::This,
-                        ));
-                }
-                let leg = ctx.send_task(&LegMoveGoal { step: p.step }, leg_options)?;
+                let leg_constraints = p.previous_body_move.map(|prev| {
+                    ConstraintSpec::sequential_achievement(TaskRef::Message(prev), TaskRef::This)
+                });
+                let leg = ctx.send_task(&LegMoveGoal { step: p.step }, leg_constraints)?;
                 let body = ctx.send_task(
                     &BodyMove { step: p.step },
-                    SendOptions {
-                        constraints: vec![ConstraintSpec::sequential_achievement(
-                            leg.task_ref(),
-                            TaskRef::This,
-                        )],
-                        ..SendOptions::default()
-                    },
+                    [ConstraintSpec::sequential_achievement(
+                        leg.task_ref(),
+                        TaskRef::This,
+                    )],
                 )?;
                 if p.step < p.steps {
                     // The next step is a sibling, under the walk (this goal's sender's node).
                     let walk = ctx.in_context(ctx.origin());
-                    let mut next = SendOptions::default();
-                    if !p.concurrent {
-                        next.constraints.push(ConstraintSpec::delay_planning(
-                            body.task_ref(),
-                            TaskRef::This,
-                        ));
-                    }
+                    let next = (!p.concurrent)
+                        .then(|| ConstraintSpec::delay_planning(body.task_ref(), TaskRef::This));
                     walk.send_task(
                         &PlanGait {
                             step: p.step + 1,
@@ -275,15 +261,12 @@ async fn walk_on(
         .unwrap();
     let started = std::time::Instant::now();
     let task = user
-        .send_task(
+        .send_watched(
             &Walk {
                 steps: 3,
                 concurrent,
             },
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
+            [],
         )
         .unwrap();
     let outcome = within("walk", task.outcome()).await.unwrap();
@@ -464,15 +447,7 @@ async fn monitors_check_conditions_and_end_with_their_node() {
         .connect(&central.connector)
         .await
         .unwrap();
-    let t = user
-        .send_task(
-            &Work,
-            SendOptions {
-                notify: true,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+    let t = user.send_watched(&Work, []).unwrap();
     assert_eq!(
         within("work", t.outcome()).await.unwrap(),
         TaskOutcome::Achieved
@@ -524,24 +499,8 @@ async fn a_killed_tree_cancels_running_handlers_and_drops_waiting_ones() {
         .connect(&central.connector)
         .await
         .unwrap();
-    let first = user
-        .send_task(
-            &BodyMove { step: 1 },
-            SendOptions {
-                notify: true,
-                ..Default::default()
-            },
-        )
-        .unwrap();
-    let second = user
-        .send_task(
-            &BodyMove { step: 2 },
-            SendOptions {
-                notify: true,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+    let first = user.send_watched(&BodyMove { step: 1 }, []).unwrap();
+    let second = user.send_watched(&BodyMove { step: 2 }, []).unwrap();
     tokio::time::sleep(Duration::from_millis(100)).await;
     let view = user.tree().await.unwrap();
     assert!(view.text.contains("bodyMove"), "{}", view.text);

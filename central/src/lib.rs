@@ -11,30 +11,24 @@
 //! - [`policy`]: the registration policy file: identities, secrets, who may register and send
 //!   what ([`Policy`]).
 //! - [`runtime`]: the async driver that owns the core, feeds it events from every link and
-//!   carries out its actions; [`CentralHandle`] to connect in-process modules and inspect it.
-//! - `inbox`: each link's bounded inbox of frames not yet handled, served round robin so a
-//!   flooding module delays only itself.
-//! - [`outbox`]: each link's bounded outbox of frames sent and not yet taken; a module that
-//!   does not keep up gets no new work, and one that stops reading is disconnected.
-//! - [`inproc`]: the in-process transport (tokio channels), the embedded default.
-//! - [`zenoh_transport`]: the zenoh transport: central as a zenoh router, modules as clients;
-//!   key-expression conventions shared with the module library.
+//!   carries out its actions; [`CentralHandle`] to hand in-process modules their transport
+//!   ([`CentralHandle::in_process`]) and to inspect central. Each link's bounded inbox (served
+//!   round robin, so a flooding module delays only itself) and outbox (a module that does not
+//!   keep up gets no new work, one that stops reading is disconnected) are `tca-link`'s.
+//! - `zenoh_router`: central as a zenoh router; modules are zenoh clients (the key scheme
+//!   and configuration are `tca_link::zenoh`'s).
 
 pub mod config;
 pub mod core;
-mod inbox;
-pub mod inproc;
-pub mod outbox;
 pub mod policy;
 pub mod runtime;
-pub mod zenoh_transport;
+mod zenoh_router;
 
 pub use config::CentralConfig;
 pub use core::{Action, Central, Event, LinkId};
-pub use inproc::InProcLink;
-pub use outbox::FrameReceiver;
 pub use policy::{Policy, PolicyError};
 pub use runtime::{CentralHandle, HighWater, RunningCentral, StartOptions, Stats, start};
+pub use tca_link::zenoh::DEFAULT_ENDPOINT;
 
 /// Errors of central's runtime.
 #[derive(Debug, thiserror::Error)]
@@ -45,12 +39,12 @@ pub enum CentralError {
     /// zenoh could not start or listen.
     #[error("zenoh: {0}; check the endpoint (e.g. tcp/127.0.0.1:7447) and that the port is free")]
     Zenoh(String),
+    /// A transport setting is wrong, or a link could not be opened.
+    #[error(transparent)]
+    Link(#[from] tca_link::LinkError),
     /// Central has stopped.
     #[error("central has stopped")]
     Stopped,
-    /// Central refused a frame (an over-limit inbox).
-    #[error(transparent)]
-    Refused(tca_messages::RouteError),
     /// The policy file could not be loaded.
     #[error(transparent)]
     Policy(#[from] PolicyError),

@@ -37,7 +37,7 @@ use std::sync::Arc;
 
 use serde::Deserialize;
 use sha3::{Digest, Sha3_256};
-use tca_messages::control::{Credentials, names};
+use tca_messages::control::{ControlKind, Credentials};
 
 /// Errors loading a policy file.
 #[derive(Debug, thiserror::Error)]
@@ -186,17 +186,10 @@ impl Grant {
     }
 }
 
-/// Control messages every connected module may send.
+/// Control messages every connected module may send: the link's bookkeeping, not the task
+/// trees.
 fn always_allowed(name: &str) -> bool {
-    matches!(
-        name,
-        names::HELLO
-            | names::HELLO_AUTH
-            | names::REGISTER
-            | names::BYE
-            | names::REGISTRY
-            | names::TREE
-    )
+    ControlKind::from_name(name).is_some_and(|k| !k.acts_on_tasks())
 }
 
 fn matches_any(patterns: &[String], name: &str) -> bool {

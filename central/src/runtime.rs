@@ -18,12 +18,34 @@ use tca_messages::{ModuleName, now_ns};
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 
+use tca_link::{
+    FrameReceiver, Gauge, Hub, InProcLink, InProcTransport, Inbox, LinkError, LinkSignal,
+    OutboxLimits, Taken,
+};
+
 use crate::core::{Action, Central, Counters, Event, LinkId, OutboxUse};
-use crate::inbox::{Inbox, Taken};
-use crate::inproc::InProcLink;
-use crate::outbox::{FrameReceiver, Gauge, OutboxLimits};
-use crate::zenoh_transport::ZenohCentral;
+use crate::zenoh_router::ZenohCentral;
 use crate::{CentralConfig, CentralError, Result};
+
+/// The driver's end of the links' signals: inboxes, outboxes and in-process links wake it
+/// through its input channel.
+#[derive(Clone, Debug)]
+pub(crate) struct DriverHub(pub(crate) mpsc::UnboundedSender<Input>);
+
+impl Hub for DriverHub {
+    fn signal(&self, signal: LinkSignal) -> bool {
+        let input = match signal {
+            LinkSignal::Ready(link) => Input::Ready(link),
+            LinkSignal::Drained(link) => Input::Drained(link),
+            LinkSignal::Closed(link) => Input::Event(Event::Closed(link)),
+        };
+        self.0.send(input).is_ok()
+    }
+
+    fn stopped(&self) -> bool {
+        self.0.is_closed()
+    }
+}
 
 /// What reaches the driver task. Frames do not travel here: they wait in their link's
 /// [`Inbox`], and `Ready` tells the driver that an idle inbox has something.
@@ -89,25 +111,34 @@ pub struct HighWater {
 #[derive(Clone, Debug)]
 pub struct CentralHandle {
     tx: mpsc::UnboundedSender<Input>,
+    hub: Arc<dyn Hub>,
     next_link: Arc<AtomicU32>,
     inbox_limits: (u32, u64),
     outbox_limits: OutboxLimits,
 }
 
 impl CentralHandle {
+    /// The transport of modules in this process: give it to the module library
+    /// (`tca_module::Connector::from(handle.in_process())`); each connection opens a new
+    /// in-process link.
+    pub fn in_process(&self) -> InProcTransport {
+        let handle = self.clone();
+        InProcTransport::new(move || handle.connect_in_process().map_err(|_| LinkError::Stopped))
+    }
+
     /// Opens an in-process link, as a module in this process connecting.
     pub fn connect_in_process(&self) -> Result<InProcLink> {
         let (link, inbox, from_central) = self.attach()?;
-        Ok(InProcLink::new(link, self.tx.clone(), inbox, from_central))
+        Ok(InProcLink::new(link, self.hub.clone(), inbox, from_central))
     }
 
     /// Opens a link: its number, its inbox and the receiver of what central sends on it.
     pub(crate) fn attach(&self) -> Result<(LinkId, Arc<Inbox>, FrameReceiver)> {
         let link = self.allocate_link();
         let (sink, from_central) = mpsc::unbounded_channel();
-        let gauge = Arc::new(Gauge::new(link, self.outbox_limits, self.tx.clone()));
+        let gauge = Arc::new(Gauge::new(link, self.outbox_limits, self.hub.clone()));
         let (frames, bytes) = self.inbox_limits;
-        let inbox = Arc::new(Inbox::new(link, frames, bytes, self.tx.clone()));
+        let inbox = Arc::new(Inbox::new(link, frames, bytes, self.hub.clone()));
         self.tx
             .send(Input::Attach(link, sink, gauge.clone(), inbox.clone()))
             .map_err(|_| CentralError::Stopped)?;
@@ -146,6 +177,11 @@ impl RunningCentral {
     /// The handle.
     pub fn handle(&self) -> CentralHandle {
         self.handle.clone()
+    }
+
+    /// The transport of modules in this process (see [`CentralHandle::in_process`]).
+    pub fn in_process(&self) -> InProcTransport {
+        self.handle.in_process()
     }
 
     /// The zenoh endpoints central listens on, if the zenoh transport is on.
@@ -188,6 +224,7 @@ pub struct StartOptions {
 pub async fn start(options: StartOptions) -> Result<RunningCentral> {
     let (tx, rx) = mpsc::unbounded_channel();
     let handle = CentralHandle {
+        hub: Arc::new(DriverHub(tx.clone())),
         tx,
         next_link: Arc::new(AtomicU32::new(1)),
         inbox_limits: (

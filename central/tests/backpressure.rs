@@ -7,8 +7,8 @@
 use std::time::Duration;
 
 use bytes::Bytes;
-use tca_central::inproc::InProcSender;
-use tca_central::{CentralConfig, CentralHandle, FrameReceiver, StartOptions};
+use tca_central::{CentralConfig, CentralHandle, StartOptions};
+use tca_link::{FrameReceiver, InProcSender};
 use tca_messages::control::{Hello, Register, Registration, names};
 use tca_messages::{
     Class, DataFormat, Envelope, MessageId, MessageName, ModuleName, RouteError, SendOptions,
@@ -24,7 +24,7 @@ struct Raw {
     seq: u32,
     tx: InProcSender,
     rx: FrameReceiver,
-    _keep: tca_central::InProcLink,
+    _keep: tca_link::InProcLink,
 }
 
 impl Raw {

@@ -15,22 +15,24 @@
 //! Messages sent with no handling open are counted as unprompted and not played.
 //!
 //! **Simulated time.** A module on simulated time starts a handler at the message's stamp (a
-//! goal, command or exception: no earlier than the end of its previous one), follows the
-//! stamps of the answers it receives and advances by what it spends. Each action's and each
+//! goal, command or exception: no earlier than the end of its previous one; the rule of
+//! [`HandlingClock`]), follows the stamps of the answers it receives and advances by what it
+//! spends. Each action's and each
 //! answer's `spend` is the recorded own time before it: its stamp minus the latest of the
 //! handler's start, its previous action's stamp and the replies it received since.
 
 use std::collections::HashMap;
 use std::time::Duration;
 
-use tca_messages::control::{AuthHello, Hello, Registration, TaskOutcome, names};
-use tca_messages::{Class, Envelope, Failure, MessageId, ModuleName, decode_data};
+use tca_messages::control::{
+    ControlKind, ControlNotice, ControlRequest, Registration, TaskOutcome,
+};
+use tca_messages::{Class, Envelope, Failure, HandlingClock, MessageId, ModuleName, decode_data};
 
 use crate::reader::LogFile;
 use crate::record::{Direction, LinkEvent, RecordKind};
 
-/// Envelope stamps below this (about 1973 as wall-clock nanoseconds) are simulated time.
-pub const SIMULATED_TIME_BELOW_NS: u64 = 100_000_000_000_000_000;
+pub use tca_messages::SIMULATED_TIME_BELOW_NS;
 
 /// One module's recorded behaviour.
 #[derive(Clone, Debug)]
@@ -63,12 +65,10 @@ pub struct Handling {
 }
 
 impl Handling {
-    /// Goals, commands and exceptions: handled one after another on simulated time.
-    pub fn is_task_like(&self) -> bool {
-        matches!(
-            self.delivery.class,
-            Class::Goal | Class::Command | Class::Exception
-        )
+    /// Goals, commands and exceptions: handled one after another on simulated time
+    /// ([`Class::runs_in_turn`]).
+    pub fn runs_in_turn(&self) -> bool {
+        self.delivery.class.runs_in_turn()
     }
 }
 
@@ -150,9 +150,10 @@ pub fn root_tasks(log: &LogFile, sender: &str) -> Vec<RootTask> {
                     outcome: None,
                 });
             }
-            Direction::Out if env.name.as_str() == names::TASK_ENDED => {
-                if let Some(&i) = env.correlation.as_ref().and_then(|c| by_id.get(c))
-                    && let Ok(ended) = decode_data::<tca_messages::control::TaskEnded>(&env.data)
+            Direction::Out if env.class == Class::Control => {
+                if let Some(ControlNotice::TaskEnded(ended)) =
+                    ControlNotice::decode(env.name.as_str(), &env.data)
+                    && let Some(&i) = env.correlation.as_ref().and_then(|c| by_id.get(c))
                     && let Some(root) = roots.get_mut(i)
                     && root.outcome.is_none()
                 {
@@ -199,7 +200,7 @@ pub fn module_script(log: &LogFile, module: &str) -> Option<ModuleScript> {
     let mut by_delivery: HashMap<MessageId, usize> = HashMap::new();
     // Query sent by the module -> (handling, action).
     let mut queries: HashMap<MessageId, (usize, usize)> = HashMap::new();
-    let mut busy_until = 0u64;
+    let clock = HandlingClock::new();
     let mut saw_stamp = None::<u64>;
     for (position, record) in log.records.iter().enumerate() {
         match &record.kind {
@@ -216,15 +217,7 @@ pub fn module_script(log: &LogFile, module: &str) -> Option<ModuleScript> {
                 match f.direction {
                     Direction::Out => {
                         if env.class.is_handled() {
-                            let is_task = matches!(
-                                env.class,
-                                Class::Goal | Class::Command | Class::Exception
-                            );
-                            let start = if is_task {
-                                busy_until.max(env.timestamp_ns)
-                            } else {
-                                env.timestamp_ns
-                            };
+                            let start = clock.start(env.class, env.timestamp_ns);
                             by_delivery.insert(env.id, building.len());
                             // Nothing answers an inform, so it would never close: what a
                             // module sends after one is not attributed to it.
@@ -251,14 +244,16 @@ pub fn module_script(log: &LogFile, module: &str) -> Option<ModuleScript> {
                         }
                     }
                     Direction::In => {
-                        let hello = match env.name.as_str() {
-                            names::HELLO => Some(decode_data::<Hello>(&env.data).ok()),
+                        let is_hello = ControlKind::from_name(env.name.as_str())
+                            .is_some_and(ControlKind::is_hello);
+                        let hello = is_hello.then(|| {
                             // Credentials are redacted from the log; the hello is what counts.
-                            names::HELLO_AUTH => {
-                                Some(decode_data::<AuthHello>(&env.data).ok().map(|a| a.hello))
+                            match ControlRequest::decode(env.name.as_str(), &env.data) {
+                                Ok(ControlRequest::Hello(h)) => Some(h),
+                                Ok(ControlRequest::HelloAuth(a)) => Some(a.hello),
+                                _ => None,
                             }
-                            _ => None,
-                        };
+                        });
                         if let Some(hello) = hello {
                             if let Some(h) = hello {
                                 script.capacity = h.capacity.max(1);
@@ -296,9 +291,7 @@ pub fn module_script(log: &LogFile, module: &str) -> Option<ModuleScript> {
                                     outcome,
                                 });
                                 b.answer_stamp = Some(env.timestamp_ns);
-                                if b.handling.is_task_like() {
-                                    busy_until = busy_until.max(env.timestamp_ns);
-                                }
+                                clock.ended(b.handling.delivery.class, env.timestamp_ns);
                             }
                             continue;
                         }
@@ -336,7 +329,7 @@ pub fn module_script(log: &LogFile, module: &str) -> Option<ModuleScript> {
             _ => {}
         }
     }
-    script.simulated_time = saw_stamp.is_some_and(|s| s < SIMULATED_TIME_BELOW_NS);
+    script.simulated_time = saw_stamp.is_some_and(tca_messages::is_simulated_stamp);
     script.handlings = building
         .into_iter()
         .map(|mut b| {
@@ -357,11 +350,17 @@ pub fn module_script(log: &LogFile, module: &str) -> Option<ModuleScript> {
     Some(script)
 }
 
-/// Control messages a handler's script plays back: those that act on the task tree.
+/// Control messages a handler's script plays back: those that act on the task tree and that
+/// a handler sends (monitors are installed by their own requests, not played).
 pub fn played_control(name: &str) -> bool {
     matches!(
-        name,
-        names::ON_EXCEPTION | names::KILL | names::CONSTRAIN | names::RETRY
+        ControlKind::from_name(name),
+        Some(
+            ControlKind::OnException
+                | ControlKind::Kill
+                | ControlKind::Constrain
+                | ControlKind::Retry
+        )
     )
 }
 

@@ -51,6 +51,13 @@ impl Class {
         matches!(self, Class::Goal | Class::Command)
     }
 
+    /// True for goals, commands and exceptions: the classes whose handlers a module runs in
+    /// turn, each starting (in simulated time) no earlier than the previous one ended.
+    /// Queries and informs are answered as of the time they were sent.
+    pub fn runs_in_turn(self) -> bool {
+        matches!(self, Class::Goal | Class::Command | Class::Exception)
+    }
+
     /// True for classes routed by name to a registered handler.
     pub fn is_handled(self) -> bool {
         Self::HANDLED.contains(&self)

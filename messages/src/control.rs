@@ -270,3 +270,307 @@ pub struct TaskEnded {
     /// Its outcome.
     pub outcome: TaskOutcome,
 }
+
+/// The kinds of control request a module sends central, by wire name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum ControlKind {
+    /// [`names::HELLO`].
+    Hello,
+    /// [`names::HELLO_AUTH`].
+    HelloAuth,
+    /// [`names::REGISTER`].
+    Register,
+    /// [`names::REGISTRY`].
+    Registry,
+    /// [`names::TREE`].
+    Tree,
+    /// [`names::BYE`].
+    Bye,
+    /// [`names::KILL`].
+    Kill,
+    /// [`names::CONSTRAIN`].
+    Constrain,
+    /// [`names::ON_EXCEPTION`].
+    OnException,
+    /// [`names::RETRY`].
+    Retry,
+    /// [`names::MONITOR`].
+    Monitor,
+}
+
+impl ControlKind {
+    /// Every kind of control request.
+    pub const ALL: [ControlKind; 11] = [
+        ControlKind::Hello,
+        ControlKind::HelloAuth,
+        ControlKind::Register,
+        ControlKind::Registry,
+        ControlKind::Tree,
+        ControlKind::Bye,
+        ControlKind::Kill,
+        ControlKind::Constrain,
+        ControlKind::OnException,
+        ControlKind::Retry,
+        ControlKind::Monitor,
+    ];
+
+    /// The wire name.
+    pub fn name(self) -> &'static str {
+        match self {
+            ControlKind::Hello => names::HELLO,
+            ControlKind::HelloAuth => names::HELLO_AUTH,
+            ControlKind::Register => names::REGISTER,
+            ControlKind::Registry => names::REGISTRY,
+            ControlKind::Tree => names::TREE,
+            ControlKind::Bye => names::BYE,
+            ControlKind::Kill => names::KILL,
+            ControlKind::Constrain => names::CONSTRAIN,
+            ControlKind::OnException => names::ON_EXCEPTION,
+            ControlKind::Retry => names::RETRY,
+            ControlKind::Monitor => names::MONITOR,
+        }
+    }
+
+    /// The kind a wire name names, if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+
+    /// A hello: the first frame on a link.
+    pub fn is_hello(self) -> bool {
+        matches!(self, ControlKind::Hello | ControlKind::HelloAuth)
+    }
+
+    /// Whether the request acts on the task trees (kill, constrain, exception handlers, retry,
+    /// monitors). The others (hellos, registration, registry and tree inspection, goodbye) are
+    /// the link's bookkeeping: every connected module may send them without a policy rule, and
+    /// they move no module's simulated clock.
+    pub fn acts_on_tasks(self) -> bool {
+        matches!(
+            self,
+            ControlKind::Kill
+                | ControlKind::Constrain
+                | ControlKind::OnException
+                | ControlKind::Retry
+                | ControlKind::Monitor
+        )
+    }
+}
+
+impl std::fmt::Display for ControlKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A control request a module sends central, with its data: the one type both the module
+/// library (which encodes it) and central (which decodes and routes it) use.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ControlRequest {
+    /// The first frame on a link; answered with a [`Welcome`] or a refusal.
+    Hello(Hello),
+    /// The first frame on a link, with credentials; answered like [`ControlRequest::Hello`].
+    HelloAuth(AuthHello),
+    /// Register handlers; answered with a [`RegisterOutcome`].
+    Register(Register),
+    /// Ask for the registry; answered with a [`Registry`].
+    Registry,
+    /// Ask for the live task trees; answered with a [`TreeView`].
+    Tree,
+    /// The module is leaving; answered with `()`.
+    Bye,
+    /// Kill a node and its subtree; answered with `()`.
+    Kill(Kill),
+    /// Add a temporal constraint; answered with `()`.
+    Constrain(Constrain),
+    /// Attach the sender as handler of an exception on a node; answered with `()`.
+    OnException(OnException),
+    /// Put a node back to waiting; answered with `()`.
+    Retry(Retry),
+    /// Monitor a node with a condition query; answered with `()`.
+    Monitor(Monitor),
+}
+
+/// Why a control request could not be read.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ControlError {
+    /// No control request has this name.
+    #[error(
+        "unknown control message {name:?}; this central understands {}",
+        ControlKind::ALL.map(ControlKind::name).join(", ")
+    )]
+    Unknown {
+        /// The name given.
+        name: String,
+    },
+    /// The data does not decode as the request's.
+    #[error("bad {kind} data: {reason}")]
+    BadData {
+        /// The request.
+        kind: ControlKind,
+        /// The decoder's complaint.
+        reason: String,
+    },
+}
+
+impl ControlRequest {
+    /// Its kind.
+    pub fn kind(&self) -> ControlKind {
+        match self {
+            ControlRequest::Hello(_) => ControlKind::Hello,
+            ControlRequest::HelloAuth(_) => ControlKind::HelloAuth,
+            ControlRequest::Register(_) => ControlKind::Register,
+            ControlRequest::Registry => ControlKind::Registry,
+            ControlRequest::Tree => ControlKind::Tree,
+            ControlRequest::Bye => ControlKind::Bye,
+            ControlRequest::Kill(_) => ControlKind::Kill,
+            ControlRequest::Constrain(_) => ControlKind::Constrain,
+            ControlRequest::OnException(_) => ControlKind::OnException,
+            ControlRequest::Retry(_) => ControlKind::Retry,
+            ControlRequest::Monitor(_) => ControlKind::Monitor,
+        }
+    }
+
+    /// The wire name.
+    pub fn name(&self) -> &'static str {
+        self.kind().name()
+    }
+
+    /// The data, postcard-encoded.
+    pub fn encode_data(&self) -> Result<Vec<u8>, crate::CodecError> {
+        use crate::codec::encode_data as enc;
+        match self {
+            ControlRequest::Hello(h) => enc(h),
+            ControlRequest::HelloAuth(h) => enc(h),
+            ControlRequest::Register(r) => enc(r),
+            ControlRequest::Registry | ControlRequest::Tree | ControlRequest::Bye => enc(&()),
+            ControlRequest::Kill(k) => enc(k),
+            ControlRequest::Constrain(c) => enc(c),
+            ControlRequest::OnException(o) => enc(o),
+            ControlRequest::Retry(r) => enc(r),
+            ControlRequest::Monitor(m) => enc(m),
+        }
+    }
+
+    /// Reads a request from its wire name and data. Requests without data (registry, tree,
+    /// goodbye) ignore what they carry.
+    pub fn decode(name: &str, data: &[u8]) -> Result<Self, ControlError> {
+        let kind = ControlKind::from_name(name).ok_or_else(|| ControlError::Unknown {
+            name: name.to_owned(),
+        })?;
+        fn dec<T: serde::de::DeserializeOwned>(
+            kind: ControlKind,
+            data: &[u8],
+        ) -> Result<T, ControlError> {
+            crate::codec::decode_data(data).map_err(|e| ControlError::BadData {
+                kind,
+                reason: e.to_string(),
+            })
+        }
+        Ok(match kind {
+            ControlKind::Hello => ControlRequest::Hello(dec(kind, data)?),
+            ControlKind::HelloAuth => ControlRequest::HelloAuth(dec(kind, data)?),
+            ControlKind::Register => ControlRequest::Register(dec(kind, data)?),
+            ControlKind::Registry => ControlRequest::Registry,
+            ControlKind::Tree => ControlRequest::Tree,
+            ControlKind::Bye => ControlRequest::Bye,
+            ControlKind::Kill => ControlRequest::Kill(dec(kind, data)?),
+            ControlKind::Constrain => ControlRequest::Constrain(dec(kind, data)?),
+            ControlKind::OnException => ControlRequest::OnException(dec(kind, data)?),
+            ControlKind::Retry => ControlRequest::Retry(dec(kind, data)?),
+            ControlKind::Monitor => ControlRequest::Monitor(dec(kind, data)?),
+        })
+    }
+}
+
+/// A control notice central sends a module unasked: the one type central (which encodes it)
+/// and the module library (which decodes it) use.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum ControlNotice {
+    /// The link is accepted (the answer to a hello).
+    Welcome(Welcome),
+    /// Stop the handler of a node that was killed.
+    Cancel(Cancel),
+    /// A goal or command the module asked to hear about ended.
+    TaskEnded(TaskEnded),
+}
+
+impl ControlNotice {
+    /// The wire name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            ControlNotice::Welcome(_) => names::WELCOME,
+            ControlNotice::Cancel(_) => names::CANCEL,
+            ControlNotice::TaskEnded(_) => names::TASK_ENDED,
+        }
+    }
+
+    /// The data, postcard-encoded.
+    pub fn encode_data(&self) -> Result<Vec<u8>, crate::CodecError> {
+        use crate::codec::encode_data as enc;
+        match self {
+            ControlNotice::Welcome(w) => enc(w),
+            ControlNotice::Cancel(c) => enc(c),
+            ControlNotice::TaskEnded(t) => enc(t),
+        }
+    }
+
+    /// Reads a notice from its wire name and data; `None` for a name that is not a notice
+    /// (answers to requests carry the request's name) or data that does not decode.
+    pub fn decode(name: &str, data: &[u8]) -> Option<Self> {
+        use crate::codec::decode_data as dec;
+        Some(match name {
+            names::WELCOME => ControlNotice::Welcome(dec(data).ok()?),
+            names::CANCEL => ControlNotice::Cancel(dec(data).ok()?),
+            names::TASK_ENDED => ControlNotice::TaskEnded(dec(data).ok()?),
+            _ => return None,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_kind_has_one_name_and_is_found_by_it() {
+        for kind in ControlKind::ALL {
+            assert!(kind.name().starts_with(CONTROL_PREFIX));
+            assert_eq!(ControlKind::from_name(kind.name()), Some(kind));
+        }
+        assert_eq!(ControlKind::from_name("tca.nope"), None);
+    }
+
+    #[test]
+    fn requests_round_trip_through_name_and_data() {
+        let requests = [
+            ControlRequest::Kill(Kill { node: NodeId(4) }),
+            ControlRequest::Retry(Retry { node: NodeId(2) }),
+            ControlRequest::Registry,
+            ControlRequest::Bye,
+        ];
+        for r in requests {
+            let data = r.encode_data().unwrap();
+            assert_eq!(ControlRequest::decode(r.name(), &data).unwrap(), r);
+        }
+    }
+
+    #[test]
+    fn unknown_names_and_bad_data_say_what_is_wrong() {
+        let err = ControlRequest::decode("tca.frobnicate", &[]).unwrap_err();
+        assert!(err.to_string().contains("tca.kill"), "{err}");
+        let err = ControlRequest::decode(names::KILL, &[]).unwrap_err();
+        assert!(err.to_string().starts_with("bad tca.kill data"), "{err}");
+    }
+
+    #[test]
+    fn notices_round_trip() {
+        let n = ControlNotice::Cancel(Cancel { node: NodeId(9) });
+        let data = n.encode_data().unwrap();
+        assert_eq!(ControlNotice::decode(n.name(), &data), Some(n));
+        assert_eq!(ControlNotice::decode(names::KILL, &data), None);
+    }
+}

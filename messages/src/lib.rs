@@ -12,12 +12,14 @@
 //! - [`class`]: the message classes of §3.2 (query, goal, command, inform, exception) and the
 //!   classes that answer them (reply, success, failure, error) or control central.
 //! - [`envelope`]: the [`Envelope`], task-node ids and temporal-constraint references.
-//! - [`message`]: the [`Message`] trait and the [`message!`] macro.
+//! - [`message`]: the [`Message`] trait, the [`message!`] macro and the classes as types
+//!   ([`kind`]), so that sending a message as the wrong class does not compile.
 //! - [`format`]: [`DataFormat`], a type's serde shape, compared field by field.
 //! - `trace`: derives a [`DataFormat`] by driving the type's `Deserialize` impl.
 //! - [`value`]: decoding data through a format without its Rust type (for the log viewer).
 //! - [`control`]: payloads of central's own `tca.*` control traffic.
 //! - [`route_error`]: [`RouteError`], what central answers when it cannot route a message.
+//! - [`sim_time`]: [`HandlingClock`], when a module's handlers start in simulated time.
 //! - [`codec`]: the single encode/decode entry point (postcard), strict and size-limited.
 //! - [`walking`]: the single-leg walking system's message vocabulary, with units.
 //! - [`error`]: error types.
@@ -31,6 +33,7 @@ pub mod format;
 pub mod id;
 pub mod message;
 pub mod route_error;
+pub mod sim_time;
 mod trace;
 pub mod value;
 pub mod walking;
@@ -45,8 +48,9 @@ pub use envelope::{
 pub use error::{CodecError, FormatError, NameError};
 pub use format::DataFormat;
 pub use id::{MAX_NAME_LEN, MessageId, MessageName, ModuleName};
-pub use message::Message;
+pub use message::{Message, kind};
 pub use route_error::RouteError;
+pub use sim_time::{HandlingClock, SIMULATED_TIME_BELOW_NS, is_simulated_stamp};
 pub use value::Value;
 
 #[cfg(test)]

@@ -1,4 +1,7 @@
 //! Typed messages: a Rust type that declares its name and class.
+//!
+//! A message's class is also a type ([`kind`]), so that sending a message as the wrong class
+//! does not compile: a module's `goal` takes only messages whose kind is [`kind::Goal`].
 
 use serde::Serialize;
 use serde::de::DeserializeOwned;
@@ -7,30 +10,86 @@ use crate::class::Class;
 use crate::error::FormatError;
 use crate::format::DataFormat;
 
+/// The classes of §3.2 as types: a [`Message`]'s `Kind` says how it may be sent.
+pub mod kind {
+    use crate::class::Class;
+
+    mod sealed {
+        pub trait Sealed {}
+    }
+
+    /// A message class as a type. Implemented by the five uninhabited types of this module
+    /// only.
+    pub trait Kind: sealed::Sealed + Send + Sync + 'static {
+        /// The class.
+        const CLASS: Class;
+    }
+
+    /// Goals and commands: the classes that become task-tree nodes.
+    pub trait Task: Kind {}
+
+    /// Goals, commands and informs: what a monitor may send when its condition holds.
+    pub trait MonitorSend: Kind {}
+
+    macro_rules! kinds {
+        ($($(#[$doc:meta])* $name:ident),*) => {$(
+            $(#[$doc])*
+            #[derive(Debug)]
+            pub enum $name {}
+            impl sealed::Sealed for $name {}
+            impl Kind for $name {
+                const CLASS: Class = Class::$name;
+            }
+        )*};
+    }
+
+    kinds!(
+        /// A query: blocks the sender until its reply.
+        Query,
+        /// A goal: a task to plan, a node of the task tree.
+        Goal,
+        /// A command: a task to execute, a node of the task tree.
+        Command,
+        /// An inform: one-way.
+        Inform,
+        /// An exception: raised by a handler, routed up the task tree.
+        Exception
+    );
+
+    impl Task for Goal {}
+    impl Task for Command {}
+    impl MonitorSend for Goal {}
+    impl MonitorSend for Command {}
+    impl MonitorSend for Inform {}
+}
+
 /// A message type. Implement it with the [`message!`](crate::message) macro:
 ///
 /// ```
 /// use serde::{Deserialize, Serialize};
-/// /// Move the carriage along the rails to a world Y position.
+/// /// Move the arm's base to a position on its rail, metres.
 /// #[derive(Serialize, Deserialize)]
-/// pub struct BodyMove { pub target_y_m: f64 }
-/// tca_messages::message!(BodyMove: command "bodyMove");
+/// pub struct MoveBase { pub target_m: f64 }
+/// tca_messages::message!(MoveBase: command "moveBase");
 ///
 /// #[derive(Serialize, Deserialize)]
-/// pub struct BodyPosition;
+/// pub struct BasePosition;
 /// #[derive(Serialize, Deserialize)]
-/// pub struct Pose { pub y_m: f64 }
-/// tca_messages::message!(BodyPosition: query "bodyPosition" -> Pose);
+/// pub struct Position { pub at_m: f64 }
+/// tca_messages::message!(BasePosition: query "basePosition" -> Position);
 ///
 /// use tca_messages::{Class, Message};
-/// assert_eq!(BodyMove::NAME, "bodyMove");
-/// assert_eq!(<BodyPosition as Message>::CLASS, Class::Query);
+/// assert_eq!(MoveBase::NAME, "moveBase");
+/// assert_eq!(<BasePosition as Message>::CLASS, Class::Query);
 /// ```
 pub trait Message: Serialize + DeserializeOwned + Send + Sync + 'static {
     /// The name central routes by.
     const NAME: &'static str;
+    /// The class as a type: [`kind::Query`], [`kind::Goal`], [`kind::Command`],
+    /// [`kind::Inform`] or [`kind::Exception`].
+    type Kind: kind::Kind;
     /// The class: query, goal, command, inform or exception.
-    const CLASS: Class;
+    const CLASS: Class = <Self::Kind as kind::Kind>::CLASS;
     /// What a query's handler answers with; `()` for the other classes.
     type Reply: Serialize + DeserializeOwned + Send + 'static;
 
@@ -57,7 +116,7 @@ macro_rules! message {
     ($ty:ty: query $name:literal -> $reply:ty) => {
         impl $crate::Message for $ty {
             const NAME: &'static str = $name;
-            const CLASS: $crate::Class = $crate::Class::Query;
+            type Kind = $crate::kind::Query;
             type Reply = $reply;
         }
     };
@@ -76,7 +135,7 @@ macro_rules! message {
     (@task $ty:ty, $class:ident, $name:literal) => {
         impl $crate::Message for $ty {
             const NAME: &'static str = $name;
-            const CLASS: $crate::Class = $crate::Class::$class;
+            type Kind = $crate::kind::$class;
             type Reply = ();
         }
     };

@@ -148,7 +148,7 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
     .await
     .context("cannot start central")?;
     let watcher = Module::builder(format!("chaos-{}", std::process::id()))
-        .connect(&Connector::InProcess(central.handle()))
+        .connect(&Connector::from(central.in_process()))
         .await
         .context("cannot watch central")?;
     let setup = ProcessSetup {

@@ -7,7 +7,7 @@ use std::time::Duration;
 use anyhow::Context as _;
 use clap::Args;
 use tca_central::runtime::StartOptions;
-use tca_central::{CentralConfig, zenoh_transport::DEFAULT_ENDPOINT};
+use tca_central::{CentralConfig, DEFAULT_ENDPOINT};
 
 #[derive(Debug, Args)]
 pub(crate) struct CentralArgs {

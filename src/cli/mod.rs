@@ -15,7 +15,7 @@ mod walk;
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
-use tca_central::zenoh_transport::DEFAULT_ENDPOINT;
+use tca_central::DEFAULT_ENDPOINT;
 
 /// Task Control Architecture: central control, modules and the tools around them.
 #[derive(Debug, Parser)]

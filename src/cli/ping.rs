@@ -38,7 +38,7 @@ pub(crate) async fn run(args: PingArgs) -> anyhow::Result<ExitCode> {
         }
         None => {
             let central = tca_central::start(StartOptions::default()).await?;
-            let connector = Connector::InProcess(central.handle());
+            let connector = Connector::from(central.in_process());
             let report = tca::ping::run(&connector, args.n, args.payload).await?;
             central.shutdown().await?;
             (report, "in-process central".to_owned())

@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context as _, bail};
 use tca_central::{CentralConfig, StartOptions};
 use tca_messages::control::{Registration, TaskOutcome};
-use tca_messages::{Class, DataFormat, MessageName, RouteError, SendOptions, encode_data};
+use tca_messages::{Class, DataFormat, MessageName, RouteError, encode_data};
 use tca_module::{Connector, Module, ModuleError};
 use tokio::task::JoinSet;
 
@@ -139,7 +139,7 @@ pub async fn run(options: &LoadOptions, log_dir: &Path) -> anyhow::Result<LoadRe
     .await
     .context("central did not start")?;
     let connector = match options.transport {
-        Transport::InProcess => Connector::InProcess(central.handle()),
+        Transport::InProcess => Connector::from(central.in_process()),
         Transport::Zenoh => Connector::zenoh(endpoint),
     };
     let tally = Arc::new(Tally::default());
@@ -367,13 +367,9 @@ async fn goal(module: Module, name: String, data: Vec<u8>, tally: Arc<Tally>) {
     let c = &tally.goals;
     c.sent.fetch_add(1, Relaxed);
     loop {
-        let notify = SendOptions {
-            notify: true,
-            ..SendOptions::default()
-        };
         // A refusal comes at once (the sender's inbox in central) or as the goal's outcome
         // (its queue in central).
-        let outcome = match module.send_raw(Class::Goal, &name, data.clone(), notify) {
+        let outcome = match module.send_watched_raw(Class::Goal, &name, data.clone(), []) {
             Ok(task) => task.outcome().await,
             Err(e) => Err(e),
         };
@@ -403,7 +399,7 @@ async fn goal(module: Module, name: String, data: Vec<u8>, tally: Arc<Tally>) {
 async fn inform(module: &Module, name: &str, data: Vec<u8>, tally: &Tally) {
     let c = &tally.informs;
     loop {
-        match module.send_raw(Class::Inform, name, data.clone(), SendOptions::default()) {
+        match module.send_raw(Class::Inform, name, data.clone(), []) {
             Ok(_) => {
                 c.sent.fetch_add(1, Relaxed);
                 return;

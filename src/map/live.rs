@@ -8,7 +8,7 @@ use std::time::Duration;
 use anyhow::{Context as _, bail};
 use tca_messages::control::TaskOutcome;
 use tca_messages::walking::{BodyPosition, MapCell, MapGrid, MapKind, MapRegion, RenderMap};
-use tca_module::{Connector, Module, SendOptions};
+use tca_module::{Connector, Module};
 use tca_robot::LegParams;
 use tca_robot::course::{PIT_SIZE_X_M, PIT_SIZE_Y_M};
 
@@ -121,7 +121,7 @@ async fn draw_from(
     let path = std::path::absolute(out)
         .with_context(|| format!("cannot make {} an absolute path", out.display()))?;
     let task = me
-        .send_task(
+        .send_watched(
             &RenderMap {
                 region: MapRegion {
                     refresh: false,
@@ -130,10 +130,7 @@ async fn draw_from(
                 overlays: Vec::new(),
                 path: path.to_string_lossy().into_owned(),
             },
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
+            [],
         )
         .context("cannot send renderMap to the PDM")?;
     let outcome = tokio::time::timeout(options.timeout, task.outcome())

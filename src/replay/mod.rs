@@ -56,8 +56,8 @@ use serde::Serialize;
 use tca_central::StartOptions;
 use tca_logs::compare::{Rules, Side};
 use tca_logs::{LogFile, RootTask};
+use tca_messages::Class;
 use tca_messages::control::TaskOutcome;
-use tca_messages::{Class, SendOptions};
 use tca_module::{Connector, Module};
 
 use crate::walk::{ComputeModel, SystemSetup, TerrainChoice, WALKING_MODULES, connect_module};
@@ -429,7 +429,7 @@ pub async fn replay(options: &ReplayOptions) -> anyhow::Result<ReplayReport> {
     })
     .await
     .context("cannot start central")?;
-    let connector = Connector::InProcess(central.handle());
+    let connector = Connector::from(central.in_process());
     // Connect in the recorded order, so link numbers (and message ids) come out the same.
     let mut stand_ins = Vec::new();
     let mut modules = Vec::new();
@@ -457,15 +457,8 @@ pub async fn replay(options: &ReplayOptions) -> anyhow::Result<ReplayReport> {
             driver_module.spend(Duration::from_nanos(env.timestamp_ns - now));
         }
         let recorded_outcome = root.outcome.as_ref().map(|(o, _)| o);
-        let task = driver_module.send_raw(
-            env.class,
-            env.name.as_str(),
-            env.data.clone(),
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
-        )?;
+        let task =
+            driver_module.send_watched_raw(env.class, env.name.as_str(), env.data.clone(), [])?;
         let limit = options.goal_timeout.unwrap_or_else(|| {
             let recorded_ns = root.outcome.as_ref().map_or(0, |(_, end)| {
                 let at = |i: usize| recorded.log.records.get(i).map_or(0, |r| r.at_ns);

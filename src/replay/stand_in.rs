@@ -14,10 +14,8 @@ use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use tca_logs::script::{Action, AnswerOutcome, ModuleScript};
-use tca_messages::control::{Constrain, Kill, OnException, Retry, names};
-use tca_messages::{
-    Class, ConstraintSpec, MessageId, NodeId, PointRef, SendOptions, TaskRef, decode_data,
-};
+use tca_messages::control::ControlRequest;
+use tca_messages::{Class, ConstraintSpec, MessageId, NodeId, PointRef, TaskRef};
 use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
 
 /// Live counterparts of recorded ids, and what is left to play.
@@ -200,50 +198,47 @@ async fn perform(ctx: &Context, action: &Action, script: &ModuleScript, state: &
             Err(e) => Err(e),
         },
         Class::Goal | Class::Command | Class::Inform | Class::Exception => {
-            let options = if env.class.is_task() {
-                remap_options(&env.options, state)
+            let constraints = if env.class.is_task() {
+                remap_constraints(&env.options.constraints, state)
             } else {
-                SendOptions::default()
+                Vec::new()
             };
-            handle
-                .send_raw(env.class, name, env.data.clone(), options)
-                .map(|task| {
-                    lock(state).ids.insert(env.id, task.id());
-                })
+            // A task sent with notification is sent so again; its end is not awaited here.
+            let sent = if env.class.is_task() && env.options.notify {
+                handle
+                    .send_watched_raw(env.class, name, env.data.clone(), constraints)
+                    .map(|t| t.id())
+            } else {
+                handle
+                    .send_raw(env.class, name, env.data.clone(), constraints)
+                    .map(|t| t.id())
+            };
+            sent.map(|id| {
+                lock(state).ids.insert(env.id, id);
+            })
         }
-        Class::Control => match name {
-            names::ON_EXCEPTION => match decode_data::<OnException>(&env.data) {
-                Ok(o) => match node(o.node) {
-                    Some(n) => handle.on_exception_raw(n, o.name.as_str()).await,
-                    None => Err(unknown_node(o.node)),
-                },
-                Err(e) => Err(e.into()),
+        Class::Control => match ControlRequest::decode(name, &env.data) {
+            Ok(ControlRequest::OnException(o)) => match node(o.node) {
+                Some(n) => handle.on_exception_raw(n, o.name.as_str()).await,
+                None => Err(unknown_node(o.node)),
             },
-            names::KILL => match decode_data::<Kill>(&env.data) {
-                // The node may have ended already, as it may have in the record.
-                Ok(k) => match node(k.node) {
-                    Some(n) => handle.kill(n).await.or(Ok(())),
-                    None => Err(unknown_node(k.node)),
-                },
-                Err(e) => Err(e.into()),
+            // The node may have ended already, as it may have in the record.
+            Ok(ControlRequest::Kill(k)) => match node(k.node) {
+                Some(n) => handle.kill(n).await.or(Ok(())),
+                None => Err(unknown_node(k.node)),
             },
-            names::RETRY => match decode_data::<Retry>(&env.data) {
-                Ok(r) => match node(r.node) {
-                    Some(n) => handle.retry(n).await,
-                    None => Err(unknown_node(r.node)),
-                },
-                Err(e) => Err(e.into()),
+            Ok(ControlRequest::Retry(r)) => match node(r.node) {
+                Some(n) => handle.retry(n).await,
+                None => Err(unknown_node(r.node)),
             },
-            names::CONSTRAIN => match decode_data::<Constrain>(&env.data) {
-                Ok(c) => match remap_constraint(&c.constraint, state) {
-                    Some(c) => handle.constrain(c).await,
-                    None => Err(ModuleError::Usage(
-                        "the constraint names a task not known in the replay".into(),
-                    )),
-                },
-                Err(e) => Err(e.into()),
+            Ok(ControlRequest::Constrain(c)) => match remap_constraint(&c.constraint, state) {
+                Some(c) => handle.constrain(c).await,
+                None => Err(ModuleError::Usage(
+                    "the constraint names a task not known in the replay".into(),
+                )),
             },
-            _ => Ok(()),
+            Ok(_) => Ok(()),
+            Err(e) => Err(ModuleError::Protocol(e.to_string())),
         },
         _ => Ok(()),
     };
@@ -258,21 +253,17 @@ fn unknown_node(n: NodeId) -> ModuleError {
     ))
 }
 
-fn remap_options(options: &SendOptions, state: &Mutex<State>) -> SendOptions {
-    SendOptions {
-        constraints: options
-            .constraints
-            .iter()
-            .filter_map(|c| {
-                let mapped = remap_constraint(c, state);
-                if mapped.is_none() {
-                    tracing::warn!(constraint = ?c, "constraint dropped: it names a task not known in the replay");
-                }
-                mapped
-            })
-            .collect(),
-        notify: options.notify,
-    }
+fn remap_constraints(constraints: &[ConstraintSpec], state: &Mutex<State>) -> Vec<ConstraintSpec> {
+    constraints
+        .iter()
+        .filter_map(|c| {
+            let mapped = remap_constraint(c, state);
+            if mapped.is_none() {
+                tracing::warn!(constraint = ?c, "constraint dropped: it names a task not known in the replay");
+            }
+            mapped
+        })
+        .collect()
 }
 
 fn remap_constraint(c: &ConstraintSpec, state: &Mutex<State>) -> Option<ConstraintSpec> {

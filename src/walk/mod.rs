@@ -19,7 +19,7 @@ use tca_messages::control::TaskOutcome;
 use tca_messages::walking::{
     BodyPosition, ControllerStatus, StepPlanned, Walk, WalkMode, WorldPoint,
 };
-use tca_module::{Connector, Module, SendOptions};
+use tca_module::{Connector, Module};
 use tokio::sync::mpsc;
 
 pub use system::{ComputeModel, SystemSetup, WALKING_MODULES, connect_all, connect_module};
@@ -155,7 +155,7 @@ pub async fn walk(
             })
             .await
             .context("cannot start central")?;
-            let connector = Connector::InProcess(central.handle());
+            let connector = Connector::from(central.in_process());
             let modules = connect_all(&connector, &setup)
                 .await
                 .context("cannot start the walking modules")?;
@@ -193,15 +193,12 @@ pub async fn walk(
             goal_y_m: g,
             from_y_m: from,
         });
-        let task = walker.send_task(
+        let task = walker.send_watched(
             &Walk {
                 goal_y_m: g,
                 mode: options.mode,
             },
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
+            [],
         )?;
         let outcome = tokio::time::timeout(WALK_TIMEOUT, task.outcome())
             .await

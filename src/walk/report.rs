@@ -10,7 +10,7 @@ use tca_messages::walking::{
     BodyMove, LegMove, MapKind, MapRegion, Overlay, PlanePoint, RenderMap, WorldPoint,
 };
 use tca_messages::{Class, decode_data};
-use tca_module::{Module, SendOptions};
+use tca_module::Module;
 use tca_robot::{CarriagePose, LegKinematics, LegParams};
 
 use super::{SystemSetup, WalkReport};
@@ -60,7 +60,7 @@ pub async fn map_picture(
                 label: format!("leg {}", i + 1),
             }),
     );
-    let task = walker.send_task(
+    let task = walker.send_watched(
         &RenderMap {
             region: MapRegion {
                 kind: MapKind::Elevation,
@@ -71,10 +71,7 @@ pub async fn map_picture(
             overlays,
             path: "map.png".into(),
         },
-        SendOptions {
-            notify: true,
-            ..SendOptions::default()
-        },
+        [],
     )?;
     let outcome = task.outcome().await?;
     if outcome != tca_messages::control::TaskOutcome::Achieved {

@@ -66,7 +66,7 @@ impl TestCentral {
             .expect("central starts");
         let connector = match &endpoint {
             Some(e) => Connector::zenoh(e.clone()),
-            None => Connector::InProcess(central.handle()),
+            None => Connector::from(central.in_process()),
         };
         TestCentral {
             central: Some(central),

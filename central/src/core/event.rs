@@ -3,9 +3,7 @@
 use bytes::Bytes;
 use tca_logs::LogRecord;
 
-/// A transport link, numbered by the adapter that opened it. The number is also the high half
-/// of every message id the module on it sends.
-pub type LinkId = u32;
+pub use tca_link::{InboxUse, LinkId, OutboxUse};
 
 /// Something that happened to central.
 #[derive(Clone, Debug)]
@@ -30,24 +28,6 @@ pub enum Event {
     OutboxLevel(LinkId, OutboxUse),
     /// The link's outbox went past its bound: the module is disconnected as too slow.
     OutboxFull(LinkId, OutboxUse),
-}
-
-/// How full a link's inbox was when a frame was refused.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct InboxUse {
-    /// Frames waiting.
-    pub frames: u64,
-    /// Their bytes.
-    pub bytes: u64,
-}
-
-/// How full a link's outbox is.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct OutboxUse {
-    /// Frames not yet taken by the link.
-    pub frames: u64,
-    /// Their bytes.
-    pub bytes: u64,
 }
 
 /// Something central wants done.

@@ -20,7 +20,7 @@
 use rustc_hash::FxHashMap as HashMap;
 
 use tca_messages::control::{OnException, Retry};
-use tca_messages::{Class, Envelope, MessageId, MessageName, ModuleName, RouteError, decode_data};
+use tca_messages::{Class, Envelope, MessageId, MessageName, ModuleName, RouteError};
 
 use super::waiting::Waiting;
 use super::{Action, Central, LinkId};
@@ -219,9 +219,8 @@ impl Central {
     pub(super) fn attach_exception_handler(
         &mut self,
         module: &ModuleName,
-        request: &Envelope,
+        on: OnException,
     ) -> Result<(), String> {
-        let on: OnException = decode_data(&request.data).map_err(|e| e.to_string())?;
         match self.registry.get(&on.name) {
             Some(e) if e.class == Class::Exception && &e.handler == module => {}
             _ => {
@@ -246,9 +245,9 @@ impl Central {
     pub(super) fn retry_node(
         &mut self,
         request: &Envelope,
+        retry: Retry,
         out: &mut Vec<Action>,
     ) -> Result<(), String> {
-        let retry: Retry = decode_data(&request.data).map_err(|e| e.to_string())?;
         let events = self
             .tree
             .retry(retry.node.0, self.now, Some(request.id.0), out)?;

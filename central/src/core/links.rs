@@ -3,10 +3,8 @@
 use std::collections::VecDeque;
 
 use tca_logs::{LinkEvent, LinkRecord, LogRecord, RecordKind};
-use tca_messages::control::{AuthHello, Hello, Welcome, names};
-use tca_messages::{
-    Class, Envelope, MessageName, ModuleName, RouteError, decode_data, encode_data,
-};
+use tca_messages::control::{ControlKind, ControlNotice, ControlRequest, Welcome};
+use tca_messages::{Class, Envelope, MessageName, ModuleName, RouteError};
 
 use super::{Action, Central, Link, LinkId, ModuleState};
 
@@ -29,27 +27,25 @@ impl Central {
     /// The first frame on a link must be a hello.
     pub(super) fn before_hello(&mut self, link: LinkId, envelope: Envelope, out: &mut Vec<Action>) {
         let is_hello = envelope.class == Class::Control
-            && matches!(envelope.name.as_str(), names::HELLO | names::HELLO_AUTH);
+            && ControlKind::from_name(envelope.name.as_str()).is_some_and(ControlKind::is_hello);
         if !is_hello {
             let reason = format!(
                 "the first frame on a link must be {} or {} (got {} {}); connect with the module \
                  library",
-                names::HELLO,
-                names::HELLO_AUTH,
+                ControlKind::Hello,
+                ControlKind::HelloAuth,
                 envelope.class,
                 envelope.name
             );
             return self.refuse(link, &envelope, reason, out);
         }
-        let decoded = if envelope.name.as_str() == names::HELLO_AUTH {
-            decode_data::<AuthHello>(&envelope.data).map(|a| (a.hello, Some(a.credentials)))
-        } else {
-            decode_data::<Hello>(&envelope.data).map(|h| (h, None))
-        };
-        let (hello, credentials) = match decoded {
-            Ok(h) => h,
-            Err(err) => return self.refuse(link, &envelope, format!("bad hello: {err}"), out),
-        };
+        let (hello, credentials) =
+            match ControlRequest::decode(envelope.name.as_str(), &envelope.data) {
+                Ok(ControlRequest::Hello(h)) => (h, None),
+                Ok(ControlRequest::HelloAuth(a)) => (a.hello, Some(a.credentials)),
+                Ok(other) => unreachable!("{} is a hello", other.kind()),
+                Err(err) => return self.refuse(link, &envelope, format!("bad hello: {err}"), out),
+            };
         if hello.module != envelope.sender {
             let reason = format!(
                 "hello names module {} but the envelope's sender is {}",
@@ -125,17 +121,11 @@ impl Central {
         }
         tracing::info!(module = %name, link, "module connected");
         self.log_link(link, LinkEvent::Connected, Some(name.clone()), detail, out);
-        let welcome = Welcome {
+        let welcome = ControlNotice::Welcome(Welcome {
             link,
             central_version: env!("CARGO_PKG_VERSION").to_owned(),
-        };
-        let data = encode_data(&welcome).unwrap_or_default();
-        let reply = self.central_envelope(
-            Class::Control,
-            control_name(names::WELCOME),
-            Some(envelope.id),
-            data,
-        );
+        });
+        let reply = self.notice_envelope(&welcome, Some(envelope.id));
         self.send(link, &reply, out);
     }
 
@@ -212,4 +202,21 @@ impl Central {
 /// A control message name (the constants are valid names).
 pub(super) fn control_name(name: &'static str) -> MessageName {
     MessageName::new(name).unwrap_or_else(|_| unreachable!("control names are valid"))
+}
+
+impl Central {
+    /// A control notice from central, answering `correlation`.
+    pub(super) fn notice_envelope(
+        &mut self,
+        notice: &ControlNotice,
+        correlation: Option<tca_messages::MessageId>,
+    ) -> Envelope {
+        let data = notice.encode_data().unwrap_or_default();
+        self.central_envelope(
+            Class::Control,
+            control_name(notice.name()),
+            correlation,
+            data,
+        )
+    }
 }

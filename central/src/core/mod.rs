@@ -41,7 +41,7 @@ use rustc_hash::FxHashMap as HashMap;
 
 use bytes::Bytes;
 use tca_logs::{Direction, FrameRecord, LogRecord, ProblemRecord, RecordKind};
-use tca_messages::control::{CENTRAL, Hello, names};
+use tca_messages::control::{CENTRAL, ControlKind, Hello};
 use tca_messages::{
     Class, Envelope, MessageId, MessageName, ModuleName, RouteError, SendOptions, encode,
     encode_data,
@@ -51,11 +51,11 @@ pub use event::{Action, Event, InboxUse, LinkId, OutboxUse};
 pub use quota::Usage;
 
 use crate::config::CentralConfig;
-use crate::outbox::OutboxLimits;
 use crate::policy::Grant;
 use registry::Entry;
 use routing::OpenQuery;
 use tasks::Task;
+use tca_link::OutboxLimits;
 use tree::Tree;
 use waiting::Waiting;
 
@@ -261,18 +261,13 @@ impl Central {
         // module knows any other time), and requests that release no task (registry, tree,
         // goodbye: tools on the wall clock send them while simulated walks run) must not move
         // anyone's clock.
-        if !matches!(
-            envelope.name.as_str(),
-            names::HELLO
-                | names::HELLO_AUTH
-                | names::REGISTER
-                | names::REGISTRY
-                | names::TREE
-                | names::BYE
-        ) {
+        let control = (envelope.class == Class::Control)
+            .then(|| ControlKind::from_name(envelope.name.as_str()))
+            .flatten();
+        if control.is_none_or(ControlKind::acts_on_tasks) {
             self.cause_stamp = envelope.timestamp_ns;
         }
-        let frame = if envelope.name.as_str() == names::HELLO_AUTH {
+        let frame = if control == Some(ControlKind::HelloAuth) {
             // Never write a secret to the log.
             permissions::redacted_hello(&envelope).unwrap_or_default()
         } else {

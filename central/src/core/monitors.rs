@@ -25,10 +25,9 @@ impl Central {
     pub(super) fn add_monitor(
         &mut self,
         module: &ModuleName,
-        request: &Envelope,
+        spec: Monitor,
         out: &mut Vec<Action>,
     ) -> Result<(), String> {
-        let spec: Monitor = decode_data(&request.data).map_err(|e| e.to_string())?;
         if !self.tree.contains(spec.node.0) {
             return Err(format!("node {} is not live", spec.node));
         }

@@ -2,7 +2,7 @@
 //! `registry`). Refused sends are logged as problems and answered with
 //! [`RouteError::NotPermitted`]; nothing of them is routed.
 
-use tca_messages::control::{AuthHello, Monitor, MonitorAction, names};
+use tca_messages::control::{AuthHello, ControlRequest, MonitorAction};
 use tca_messages::{Class, Envelope, ModuleName, RouteError, decode_data, encode, encode_data};
 
 use super::{Action, Central, LinkId};
@@ -25,8 +25,8 @@ impl Central {
             }
             Class::Control => {
                 let mut v = vec![envelope.name.to_string()];
-                if envelope.name.as_str() == names::MONITOR
-                    && let Ok(m) = decode_data::<Monitor>(&envelope.data)
+                if let Ok(ControlRequest::Monitor(m)) =
+                    ControlRequest::decode(envelope.name.as_str(), &envelope.data)
                 {
                     v.push(m.query.to_string());
                     match m.action {

@@ -2,7 +2,7 @@
 
 use tca_logs::{LogRecord, RecordKind, RegisteredRecord};
 use tca_messages::control::{Register, RegisterOutcome, Registration, Registry, RegistryEntry};
-use tca_messages::{Class, DataFormat, Envelope, MessageName, ModuleName, RouteError, decode_data};
+use tca_messages::{Class, DataFormat, Envelope, MessageName, ModuleName, RouteError};
 
 use super::{Action, Central, LinkId};
 
@@ -20,16 +20,10 @@ impl Central {
         &mut self,
         link: LinkId,
         module: ModuleName,
-        envelope: Envelope,
+        envelope: &Envelope,
+        request: Register,
         out: &mut Vec<Action>,
     ) {
-        let request: Register = match decode_data(&envelope.data) {
-            Ok(r) => r,
-            Err(err) => {
-                let reason = format!("bad registration: {err}");
-                return self.send_error(link, &envelope, RouteError::Refused { reason }, out);
-            }
-        };
         let mut outcome = RegisterOutcome::default();
         for entry in request.entries {
             let name = entry.name.clone();
@@ -41,7 +35,7 @@ impl Central {
                 }
             }
         }
-        self.reply_control(link, &envelope, &outcome, out);
+        self.reply_control(link, envelope, &outcome, out);
         // Whatever waited for this module can go now that it handles its messages again.
         self.deliver_waiting(&module, out);
         self.dispatch(&module, out);

@@ -1,10 +1,8 @@
 //! Queries, informs and exceptions: routed by name; and the replies that answer queries.
 
 use serde::Serialize;
-use tca_messages::control::{Constrain, Kill, TreeView, names};
-use tca_messages::{
-    Class, Envelope, MessageId, MessageName, ModuleName, RouteError, decode_data, encode_data,
-};
+use tca_messages::control::{ControlError, ControlRequest, TreeView};
+use tca_messages::{Class, Envelope, MessageId, MessageName, ModuleName, RouteError, encode_data};
 
 use super::waiting::Waiting;
 use super::{Action, Central, LinkId};
@@ -162,87 +160,66 @@ impl Central {
         envelope: Envelope,
         out: &mut Vec<Action>,
     ) {
-        match envelope.name.as_str() {
-            names::REGISTER => self.register(link, module, envelope, out),
-            names::REGISTRY => {
+        let request = match ControlRequest::decode(envelope.name.as_str(), &envelope.data) {
+            Ok(request) => request,
+            Err(err @ ControlError::Unknown { .. }) => {
+                let reason = err.to_string();
+                return self.send_error(link, &envelope, RouteError::Refused { reason }, out);
+            }
+            Err(err) => {
+                let reason = err.to_string();
+                return self.send_error(link, &envelope, RouteError::BadFrame { reason }, out);
+            }
+        };
+        let done: Result<(), RouteError> = match request {
+            ControlRequest::Hello(_) | ControlRequest::HelloAuth(_) => Err(RouteError::BadFrame {
+                reason: format!(
+                    "module {module} is already connected; a hello is the first frame on a \
+                     link only"
+                ),
+            }),
+            ControlRequest::Register(register) => {
+                return self.register(link, module, &envelope, register, out);
+            }
+            ControlRequest::Registry => {
                 let view = self.registry_view();
                 self.reply_control(link, &envelope, &view, out);
+                return;
             }
-            names::BYE => {
+            ControlRequest::Bye => {
                 self.reply_control(link, &envelope, &(), out);
-                self.bye(link, out);
+                return self.bye(link, out);
             }
-            names::TREE => {
+            ControlRequest::Tree => {
                 let view = TreeView {
                     text: self.tree.render(),
                     nodes: self.tree.len() as u64,
                 };
                 self.reply_control(link, &envelope, &view, out);
+                return;
             }
-            names::KILL => match decode_data::<Kill>(&envelope.data) {
-                Ok(kill) => match self.kill_node(kill.node, Some(envelope.id), out) {
-                    Ok(()) => self.reply_control(link, &envelope, &(), out),
-                    Err(reason) => {
-                        self.send_error(link, &envelope, RouteError::Tree { reason }, out)
-                    }
-                },
-                Err(err) => self.send_error(
-                    link,
-                    &envelope,
-                    RouteError::BadFrame {
-                        reason: err.to_string(),
-                    },
-                    out,
-                ),
-            },
-            names::ON_EXCEPTION => match self.attach_exception_handler(&module, &envelope) {
-                Ok(()) => self.reply_control(link, &envelope, &(), out),
-                Err(reason) => {
-                    self.send_error(link, &envelope, RouteError::Refused { reason }, out)
-                }
-            },
-            names::MONITOR => match self.add_monitor(&module, &envelope, out) {
-                Ok(()) => self.reply_control(link, &envelope, &(), out),
-                Err(reason) => {
-                    self.send_error(link, &envelope, RouteError::Refused { reason }, out)
-                }
-            },
-            names::RETRY => match self.retry_node(&envelope, out) {
-                Ok(()) => self.reply_control(link, &envelope, &(), out),
-                Err(reason) => self.send_error(link, &envelope, RouteError::Tree { reason }, out),
-            },
-            names::CONSTRAIN => match decode_data::<Constrain>(&envelope.data) {
-                Ok(c) => match self.add_constraint(c.constraint, None, Some(envelope.id), out) {
-                    Ok(()) => self.reply_control(link, &envelope, &(), out),
-                    Err(reason) => {
-                        self.send_error(link, &envelope, RouteError::Tree { reason }, out)
-                    }
-                },
-                Err(err) => self.send_error(
-                    link,
-                    &envelope,
-                    RouteError::BadFrame {
-                        reason: err.to_string(),
-                    },
-                    out,
-                ),
-            },
-            other => {
-                let reason = format!(
-                    "unknown control message {other:?}; this central understands {}, {}, {}, \
-                     {}, {}, {}, {}, {} and {}",
-                    names::REGISTER,
-                    names::REGISTRY,
-                    names::TREE,
-                    names::KILL,
-                    names::CONSTRAIN,
-                    names::ON_EXCEPTION,
-                    names::RETRY,
-                    names::MONITOR,
-                    names::BYE
-                );
-                self.send_error(link, &envelope, RouteError::Refused { reason }, out)
-            }
+            ControlRequest::Kill(kill) => self
+                .kill_node(kill.node, Some(envelope.id), out)
+                .map_err(|reason| RouteError::Tree { reason }),
+            ControlRequest::OnException(on) => self
+                .attach_exception_handler(&module, on)
+                .map_err(|reason| RouteError::Refused { reason }),
+            ControlRequest::Monitor(monitor) => self
+                .add_monitor(&module, monitor, out)
+                .map_err(|reason| RouteError::Refused { reason }),
+            ControlRequest::Retry(retry) => self
+                .retry_node(&envelope, retry, out)
+                .map_err(|reason| RouteError::Tree { reason }),
+            ControlRequest::Constrain(c) => self
+                .add_constraint(c.constraint, None, Some(envelope.id), out)
+                .map_err(|reason| RouteError::Tree { reason }),
+            other => Err(RouteError::Refused {
+                reason: format!("{} is not handled by this central", other.kind()),
+            }),
+        };
+        match done {
+            Ok(()) => self.reply_control(link, &envelope, &(), out),
+            Err(error) => self.send_error(link, &envelope, error, out),
         }
     }
 

@@ -1,13 +1,12 @@
 //! Goals and commands: task-tree nodes, dispatched when their constraints hold and their
 //! handler module has capacity (TCA's resource management).
 
-use tca_messages::control::{Cancel, TaskEnded, TaskOutcome, names};
+use tca_messages::control::{Cancel, ControlNotice, TaskEnded, TaskOutcome};
 use tca_messages::{
     Class, ConstraintSpec, Envelope, Failure, MessageId, ModuleName, NodeId, RouteError, TaskRef,
-    decode_data, encode_data,
+    decode_data,
 };
 
-use super::links::control_name;
 use super::tree::{RelConstraint, TreeEvent, Who, point};
 use super::{Action, Central, LinkId};
 
@@ -431,9 +430,8 @@ impl Central {
         };
         state.running = state.running.saturating_sub(1);
         if let Some(link) = state.link {
-            let data = encode_data(&Cancel { node: NodeId(node) }).unwrap_or_default();
-            let env =
-                self.central_envelope(Class::Control, control_name(names::CANCEL), Some(id), data);
+            let cancel = ControlNotice::Cancel(Cancel { node: NodeId(node) });
+            let env = self.notice_envelope(&cancel, Some(id));
             self.send(link, &env, out);
         }
         if !touched.contains(&handler) {
@@ -460,17 +458,11 @@ impl Central {
         let Some(link) = self.modules.get(&task.sender).and_then(|m| m.link) else {
             return;
         };
-        let ended = TaskEnded {
+        let ended = ControlNotice::TaskEnded(TaskEnded {
             node: NodeId(node),
             outcome,
-        };
-        let data = encode_data(&ended).unwrap_or_default();
-        let mut env = self.central_envelope(
-            Class::Control,
-            control_name(names::TASK_ENDED),
-            Some(id),
-            data,
-        );
+        });
+        let mut env = self.notice_envelope(&ended, Some(id));
         // On the clock of the message that ended it (simulated time for simulations).
         env.timestamp_ns = self.cause_stamp;
         self.send(link, &env, out);

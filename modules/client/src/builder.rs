@@ -4,18 +4,21 @@ use std::collections::HashMap;
 use std::future::Future;
 use std::time::Duration;
 
-use tca_messages::control::{Credentials, Hello, Register, RegisterOutcome, Welcome, names};
+use tca_link::FrameReceiver;
+use tca_messages::control::{
+    ControlRequest, Credentials, Hello, Register, RegisterOutcome, Welcome,
+};
 use tca_messages::{
     Class, DEFAULT_MAX_FRAME_BYTES, Envelope, Message, MessageId, MessageName, ModuleName,
-    RouteError, decode, decode_data, encode, encode_data,
+    RouteError, decode, decode_data, encode,
 };
 
 use crate::connector::Connector;
 use crate::context::Context;
-use crate::credentials::{credentials_from_env, hello_payload};
+use crate::credentials::{credentials_from_env, hello_request};
 use crate::error::{HandlerError, ModuleError, Result};
 use crate::handler::{HandlerEntry, erase};
-use crate::module::{DEFAULT_QUERY_TIMEOUT, Module};
+use crate::module::{DEFAULT_QUERY_TIMEOUT, Module, Settings};
 use crate::rejoin::{Greeting, Rejoiner, bootstrap};
 
 /// A sensible [`ModuleBuilder::requery_after_crash`] for modules whose peers are restarted
@@ -121,28 +124,14 @@ impl ModuleBuilder {
 
     /// Registers the handler of message type `M` (a query, goal, command, inform or
     /// exception). For queries the handler returns the reply; for the others `()`.
-    pub fn handle<M, F, Fut>(mut self, handler: F) -> Self
+    pub fn handle<M, F, Fut>(self, handler: F) -> Self
     where
         M: Message,
         F: Fn(Context, M) -> Fut + Send + Sync + 'static,
         Fut: Future<Output = Result<M::Reply, HandlerError>> + Send + 'static,
     {
-        match erase::<M, F, Fut>(handler, self.replace) {
-            Ok((name, entry)) => {
-                if self.handlers.insert(name.clone(), entry).is_some() && self.error.is_none() {
-                    self.error = Some(ModuleError::Usage(format!(
-                        "two handlers for {name} in module {}",
-                        self.name
-                    )));
-                }
-            }
-            Err(e) => {
-                if self.error.is_none() {
-                    self.error = Some(e);
-                }
-            }
-        }
-        self
+        let replace = self.replace;
+        self.add_handler(erase::<M, F, Fut>(handler, replace))
     }
 
     /// Registers a handler of encoded data: the registration (name, class, data and reply
@@ -152,7 +141,7 @@ impl ModuleBuilder {
     /// `tca log replay`, which plays a module back from a traffic log. `registration.replace`
     /// follows [`ModuleBuilder::replace`].
     pub fn handle_raw<F, Fut>(
-        mut self,
+        self,
         mut registration: tca_messages::control::Registration,
         handler: F,
     ) -> Self
@@ -161,21 +150,26 @@ impl ModuleBuilder {
         Fut: Future<Output = Result<Vec<u8>, HandlerError>> + Send + 'static,
     {
         registration.replace = self.replace;
-        match crate::handler::erase_raw(registration, handler) {
+        self.add_handler(crate::handler::erase_raw(registration, handler))
+    }
+
+    /// Adds an erased handler, keeping the first error (a bad type, a second handler).
+    fn add_handler(mut self, entry: Result<HandlerEntry>) -> Self {
+        let error = match entry {
             Ok(entry) => {
                 let name = entry.registration.name.clone();
-                if self.handlers.insert(name.clone(), entry).is_some() && self.error.is_none() {
-                    self.error = Some(ModuleError::Usage(format!(
+                match self.handlers.insert(name.clone(), entry) {
+                    Some(_) => Some(ModuleError::Usage(format!(
                         "two handlers for {name} in module {}",
                         self.name
-                    )));
+                    ))),
+                    None => None,
                 }
             }
-            Err(e) => {
-                if self.error.is_none() {
-                    self.error = Some(e);
-                }
-            }
+            Err(e) => Some(e),
+        };
+        if self.error.is_none() {
+            self.error = error;
         }
         self
     }
@@ -196,13 +190,13 @@ impl ModuleBuilder {
             host: hostname(),
         };
         let credentials = self.credentials.or_else(credentials_from_env);
-        let (hello_name, hello_data) = hello_payload(hello, credentials)?;
-        let hello_env = bootstrap(&name, hello_name, MessageId::new(0, 0), hello_data.clone())?;
-        link.tx.send(encode(&hello_env)?.into())?;
+        let hello = hello_request(hello, credentials);
+        let hello_env = bootstrap(&name, &hello, MessageId::new(0, 0))?;
+        link.sender.send(encode(&hello_env)?.into())?;
         // Central may deliver messages waiting for this module as soon as it is welcomed,
         // before the registration is answered: they are kept and handled first.
         let mut early = Vec::new();
-        let answer = next_answer(&mut link.rx, hello_env.id, connector, &mut early).await?;
+        let answer = next_answer(&mut link.receiver, hello_env.id, connector, &mut early).await?;
         let welcome: Welcome = match answer.class {
             Class::Control => decode_data(&answer.data)?,
             _ => {
@@ -216,18 +210,17 @@ impl ModuleBuilder {
             }
         };
         // Register every handler.
-        let register = Register {
+        let register = ControlRequest::Register(Register {
             entries: self
                 .handlers
                 .values()
                 .map(|h| h.registration.clone())
                 .collect(),
-        };
+        });
         let reg_id = MessageId::new(welcome.link, 1);
-        let register = encode_data(&register)?;
-        let reg_env = bootstrap(&name, names::REGISTER, reg_id, register.clone())?;
-        link.tx.send(encode(&reg_env)?.into())?;
-        let answer = next_answer(&mut link.rx, reg_id, connector, &mut early).await?;
+        let reg_env = bootstrap(&name, &register, reg_id)?;
+        link.sender.send(encode(&reg_env)?.into())?;
+        let answer = next_answer(&mut link.receiver, reg_id, connector, &mut early).await?;
         if answer.class != Class::Reply {
             let reason = decode_data::<RouteError>(&answer.data)
                 .map(|e| e.to_string())
@@ -244,30 +237,30 @@ impl ModuleBuilder {
                     .collect(),
             ));
         }
-        tracing::info!(module = %name, link = welcome.link, handlers = self.handlers.len(), "connected to {}", connector.describe());
+        let handlers = self.handlers.len();
         let module = Module::new(
-            name,
-            welcome.link,
-            2,
-            link.tx,
-            self.handlers,
-            self.query_timeout,
-            self.requery_after_crash,
-            self.max_frame_bytes,
-            self.sim_time,
+            Settings {
+                name: name.clone(),
+                link_no: welcome.link,
+                first_seq: 2,
+                handlers: self.handlers,
+                query_timeout: self.query_timeout,
+                requery_after_crash: self.requery_after_crash,
+                max_frame_bytes: self.max_frame_bytes,
+                sim_time: self.sim_time,
+            },
+            link.sender,
             link.keep,
         );
-        // Over zenoh, central can die and come back: keep what it takes to join it again.
-        let rejoiner = link.presence.is_some().then(|| {
-            Rejoiner::new(Greeting {
-                hello_name,
-                hello_data,
-                register,
-            })
-        });
+        tracing::info!(module = %name, link = welcome.link, handlers, "connected to {}", connector.describe());
+        // Where central can die and come back: keep what it takes to join it again.
+        let rejoiner = link
+            .presence
+            .is_some()
+            .then(|| Rejoiner::new(Greeting { hello, register }));
         tokio::spawn(Module::receive_loop(
             std::sync::Arc::downgrade(&module.shared),
-            link.rx,
+            link.receiver,
             link.presence,
             rejoiner,
             early,
@@ -279,7 +272,7 @@ impl ModuleBuilder {
 /// Waits for central's answer to a bootstrap message, keeping whatever else arrives first in
 /// `early`.
 async fn next_answer(
-    rx: &mut tca_central::FrameReceiver,
+    rx: &mut FrameReceiver,
     id: MessageId,
     connector: &Connector,
     early: &mut Vec<Envelope>,

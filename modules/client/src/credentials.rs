@@ -7,11 +7,9 @@
 //! for the hello, `TCA_ZENOH_USER` and `TCA_ZENOH_PASSWORD` for zenoh. Code wins over the
 //! environment.
 
-use tca_messages::control::{AuthHello, Credentials, Hello, names};
+use tca_messages::control::{AuthHello, ControlRequest, Credentials, Hello};
 
-use crate::error::Result;
-
-pub use tca_central::zenoh_transport::ZenohLogin;
+pub use tca_link::ZenohLogin;
 
 /// The credentials named by `TCA_IDENTITY` and `TCA_SECRET`, when both are set.
 pub fn credentials_from_env() -> Option<Credentials> {
@@ -20,16 +18,10 @@ pub fn credentials_from_env() -> Option<Credentials> {
     Some(Credentials { identity, secret })
 }
 
-/// The hello's control name and data: `tca.helloAuth` with credentials, else `tca.hello`.
-pub(crate) fn hello_payload(
-    hello: Hello,
-    credentials: Option<Credentials>,
-) -> Result<(&'static str, Vec<u8>)> {
-    Ok(match credentials {
-        Some(credentials) => (
-            names::HELLO_AUTH,
-            tca_messages::encode_data(&AuthHello { hello, credentials })?,
-        ),
-        None => (names::HELLO, tca_messages::encode_data(&hello)?),
-    })
+/// The hello: `tca.helloAuth` with credentials, else `tca.hello`.
+pub(crate) fn hello_request(hello: Hello, credentials: Option<Credentials>) -> ControlRequest {
+    match credentials {
+        Some(credentials) => ControlRequest::HelloAuth(AuthHello { hello, credentials }),
+        None => ControlRequest::Hello(hello),
+    }
 }

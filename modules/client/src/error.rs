@@ -1,7 +1,9 @@
 //! Errors a module sees.
 
+use std::sync::Arc;
 use std::time::Duration;
 
+use tca_link::LinkError;
 use tca_messages::{CodecError, FormatError, RouteError};
 use thiserror::Error;
 
@@ -61,21 +63,54 @@ pub enum ModuleError {
          (same endpoint) and send again"
     )]
     CentralLost,
-    /// The module was used wrongly.
+    /// Central sent something this library cannot read (a different protocol version, or a
+    /// corrupt frame).
+    #[error("unreadable answer from central: {0}")]
+    Protocol(String),
+    /// A module's configuration is wrong (a parameter out of range, a transport setting, a
+    /// file that cannot be read); the message says what to fix.
+    #[error("{0}")]
+    Config(String),
+    /// A module's files could not be read or written.
+    #[error("{what}: {source}")]
+    Io {
+        /// What was being done, e.g. `cannot write the state file out/state/controller.json`.
+        what: String,
+        /// The cause.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The module library was used wrongly (a name that is not a valid message name, two
+    /// handlers for one message, a class a call does not take).
     #[error("{0}")]
     Usage(String),
+}
+
+impl From<LinkError> for ModuleError {
+    fn from(e: LinkError) -> Self {
+        match e {
+            LinkError::Stopped => ModuleError::Disconnected,
+            // Over its inbox limit in central: the send is refused, the link stays.
+            LinkError::Refused(route) => ModuleError::Route(route),
+            LinkError::Open(reason) => ModuleError::Connect(reason),
+            LinkError::Config(reason) => ModuleError::Config(reason),
+        }
+    }
 }
 
 /// Result alias of this crate.
 pub type Result<T, E = ModuleError> = std::result::Result<T, E>;
 
-/// A handler's failure: a reason sent back to central (and to the sender of a query).
+/// A handler's failure: a reason sent back to central (and to the sender of a query), and the
+/// error that caused it, if any, for the module's own diagnostics.
 ///
-/// Any error converts into it (`?` works in handlers); so does a string via [`HandlerError::new`].
-#[derive(Debug, Clone, PartialEq, Eq)]
+/// Any error converts into it (`?` works in handlers), keeping it as the cause; so does a
+/// string via [`HandlerError::new`].
+#[derive(Debug, Clone)]
 pub struct HandlerError {
-    /// What went wrong.
+    /// What went wrong: what central passes on.
     pub reason: String,
+    cause: Option<Arc<dyn std::error::Error + Send + Sync + 'static>>,
 }
 
 impl HandlerError {
@@ -83,9 +118,23 @@ impl HandlerError {
     pub fn new(reason: impl Into<String>) -> Self {
         HandlerError {
             reason: reason.into(),
+            cause: None,
         }
     }
+
+    /// The error the failure came from, when it came from one.
+    pub fn cause(&self) -> Option<&(dyn std::error::Error + Send + Sync + 'static)> {
+        self.cause.as_deref()
+    }
 }
+
+impl PartialEq for HandlerError {
+    fn eq(&self, other: &Self) -> bool {
+        self.reason == other.reason
+    }
+}
+
+impl Eq for HandlerError {}
 
 impl std::fmt::Display for HandlerError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -93,8 +142,39 @@ impl std::fmt::Display for HandlerError {
     }
 }
 
-impl<E: std::error::Error> From<E> for HandlerError {
+impl<E: std::error::Error + Send + Sync + 'static> From<E> for HandlerError {
     fn from(e: E) -> Self {
-        HandlerError::new(e.to_string())
+        HandlerError {
+            reason: e.to_string(),
+            cause: Some(Arc::new(e)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_handler_error_keeps_its_cause() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "no map tile");
+        let e = HandlerError::from(io);
+        assert_eq!(e.reason, "no map tile");
+        let cause = e.cause().expect("the io error is kept");
+        let io = cause.downcast_ref::<std::io::Error>().expect("as itself");
+        assert_eq!(io.kind(), std::io::ErrorKind::NotFound);
+        assert!(HandlerError::new("plain").cause().is_none());
+    }
+
+    #[test]
+    fn link_errors_become_the_module_errors_users_know() {
+        assert!(matches!(
+            ModuleError::from(LinkError::Stopped),
+            ModuleError::Disconnected
+        ));
+        assert!(matches!(
+            ModuleError::from(LinkError::Config("x".into())),
+            ModuleError::Config(_)
+        ));
     }
 }

@@ -49,23 +49,16 @@ where
     Ok(HandlerEntry { registration, call })
 }
 
-/// Wraps a typed handler.
-pub(crate) fn erase<M, F, Fut>(f: F, replace: bool) -> Result<(MessageName, HandlerEntry)>
+/// Wraps a typed handler. (Every message kind has handlers.)
+pub(crate) fn erase<M, F, Fut>(f: F, replace: bool) -> Result<HandlerEntry>
 where
     M: Message,
     F: Fn(Context, M) -> Fut + Send + Sync + 'static,
     Fut: Future<Output = Result<M::Reply, HandlerError>> + Send + 'static,
 {
-    if !M::CLASS.is_handled() {
-        return Err(ModuleError::Usage(format!(
-            "{} is declared as a {}; only queries, goals, commands, informs and exceptions have handlers",
-            M::NAME,
-            M::CLASS
-        )));
-    }
     let name = MessageName::new(M::NAME).map_err(|e| ModuleError::Usage(e.to_string()))?;
     let registration = Registration {
-        name: name.clone(),
+        name,
         class: M::CLASS,
         format: M::format()?,
         reply: M::reply_format()?,
@@ -85,5 +78,5 @@ where
             encode_data(&reply).map_err(|e| HandlerError::new(e.to_string()))
         }) as HandlerFuture
     });
-    Ok((name, HandlerEntry { registration, call }))
+    Ok(HandlerEntry { registration, call })
 }

@@ -28,15 +28,46 @@
 //! # Layout
 //!
 //! - [`builder`]: [`ModuleBuilder`]: name, capacity, handlers, `connect`.
-//! - [`module`]: [`Module`], the connected handle: `query`, `goal`, `command`, `inform`,
-//!   registry and tree inspection, kill and constraints; the receive loop that runs handlers.
+//! - [`module`]: [`Module`], the connected handle, by job: sending (`query`, `goal`,
+//!   `command`, `inform`, `raise`, typed and raw), control requests (registry and tree
+//!   inspection, kill, constraints, exception handlers, monitors) and the link's life cycle,
+//!   receiving and dispatch to handlers, the simulated clock.
 //! - [`context`]: [`Context`], what a handler gets: sends attach to the handler's task node.
-//! - [`connector`]: [`Connector`]: in-process or zenoh.
+//! - [`connector`]: [`Connector`]: any `tca-link` transport (in-process, zenoh).
 //! - [`credentials`]: the identity/secret of the hello and the zenoh login, in code or from
 //!   `TCA_IDENTITY`/`TCA_SECRET` and `TCA_ZENOH_USER`/`TCA_ZENOH_PASSWORD`.
 //! - [`compute_time`]: [`ComputeTime`], what a handler charges to simulated time.
 //! - `handler`: type erasure of handlers.
+//! - [`rejoin`]: joining a restarted central again (transports where central can die alone).
 //! - [`error`]: [`ModuleError`] and [`HandlerError`].
+//!
+//! Message classes are checked when the code compiles: a goal is sent with `goal`, a query
+//! with `query`, and not the other way round. This compiles:
+//!
+//! ```no_run
+//! use serde::{Deserialize, Serialize};
+//! #[derive(Serialize, Deserialize)]
+//! pub struct BasePosition;
+//! tca_messages::message!(BasePosition: query "basePosition" -> f64);
+//!
+//! fn plan(module: &tca_module::Module) {
+//!     let _ = module.query(&BasePosition);
+//! }
+//! ```
+//!
+//! and this does not:
+//!
+//! ```compile_fail
+//! use serde::{Deserialize, Serialize};
+//! #[derive(Serialize, Deserialize)]
+//! pub struct BasePosition;
+//! tca_messages::message!(BasePosition: query "basePosition" -> f64);
+//!
+//! fn plan(module: &tca_module::Module) {
+//!     // A query is not a goal: this does not compile.
+//!     let _ = module.goal(&BasePosition);
+//! }
+//! ```
 
 pub mod builder;
 pub mod compute_time;
@@ -54,6 +85,6 @@ pub use connector::Connector;
 pub use context::Context;
 pub use credentials::ZenohLogin;
 pub use error::{HandlerError, ModuleError, Result};
-pub use module::{DEFAULT_QUERY_TIMEOUT, Module, Task, raise_action, send_action};
+pub use module::{DEFAULT_QUERY_TIMEOUT, Module, Task, WatchedTask, raise_action, send_action};
 pub use tca_messages::control::MonitorAction;
-pub use tca_messages::{self as messages, ConstraintSpec, SendOptions, TaskRef};
+pub use tca_messages::{self as messages, ConstraintSpec, TaskRef, kind};

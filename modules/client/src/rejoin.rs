@@ -6,7 +6,7 @@
 //! watchers at once with [`ModuleError::CentralLost`](crate::ModuleError::CentralLost), stops
 //! its running handlers (their ends would mean nothing to a new central), and refuses new
 //! sends with the same error. Its zenoh session meanwhile keeps trying to reach the router,
-//! backing off (see `tca_central::zenoh_transport::RETRY_PERIOD_INIT_MS`).
+//! backing off (see `tca_link::zenoh::RETRY_PERIOD_INIT_MS`).
 //!
 //! When central's token is back, the module says hello again and registers the same handlers;
 //! when central welcomes it, it is *online* again and serves as before. Until then it repeats
@@ -15,14 +15,14 @@
 
 use std::time::Duration;
 
-use tca_messages::control::{RegisterOutcome, Welcome, names};
+use tca_link::Presence;
+use tca_messages::control::{ControlRequest, RegisterOutcome, Welcome};
 use tca_messages::{
     Class, Envelope, MessageId, MessageName, ModuleName, RouteError, SendOptions, decode_data,
     now_ns,
 };
 use tokio::time::Instant;
 
-use crate::connector::Presence;
 use crate::error::{ModuleError, Result};
 use crate::module::Module;
 
@@ -38,12 +38,10 @@ const REGISTER_PATIENCE: Duration = Duration::from_secs(5);
 /// What a module says to join central: kept to say it again.
 #[derive(Clone, Debug)]
 pub(crate) struct Greeting {
-    /// `tca.hello` or `tca.helloAuth`.
-    pub(crate) hello_name: &'static str,
-    /// The hello's data (with credentials, when the module has them).
-    pub(crate) hello_data: Vec<u8>,
-    /// The encoded [`tca_messages::control::Register`] of every handler.
-    pub(crate) register: Vec<u8>,
+    /// The hello (with credentials, when the module has them).
+    pub(crate) hello: ControlRequest,
+    /// The registration of every handler.
+    pub(crate) register: ControlRequest,
 }
 
 /// Where a module stands with central.
@@ -157,7 +155,7 @@ impl Rejoiner {
                 };
                 module.set_link(welcome.link);
                 let id = module.next_id();
-                match self.send(module, names::REGISTER, id, self.greeting.register.clone()) {
+                match self.send(module, &self.greeting.register, id) {
                     Ok(()) => {
                         self.phase = Phase::Register {
                             id,
@@ -203,12 +201,7 @@ impl Rejoiner {
         let wait = FIRST_RETRY
             .saturating_mul(1 << attempt.min(8))
             .min(LONGEST_RETRY);
-        if let Err(e) = self.send(
-            module,
-            self.greeting.hello_name,
-            MessageId::new(0, 0),
-            self.greeting.hello_data.clone(),
-        ) {
+        if let Err(e) = self.send(module, &self.greeting.hello, MessageId::new(0, 0)) {
             tracing::warn!(error = %e, "cannot say hello to central");
         }
         self.phase = Phase::Hello {
@@ -217,22 +210,22 @@ impl Rejoiner {
         };
     }
 
-    fn send(&self, module: &Module, name: &str, id: MessageId, data: Vec<u8>) -> Result<()> {
-        module.send_bootstrap(&bootstrap(module.name(), name, id, data)?)
+    fn send(&self, module: &Module, request: &ControlRequest, id: MessageId) -> Result<()> {
+        module.send_bootstrap(&bootstrap(module.name(), request, id)?)
     }
 }
 
 /// A handshake envelope: hello (id 0.0, before the link number is known) or registration.
 pub(crate) fn bootstrap(
     name: &ModuleName,
-    control: &str,
+    request: &ControlRequest,
     id: MessageId,
-    data: Vec<u8>,
 ) -> Result<Envelope> {
+    let data = request.encode_data()?;
     Ok(Envelope {
         id,
         class: Class::Control,
-        name: MessageName::new(control).map_err(|e| ModuleError::Usage(e.to_string()))?,
+        name: MessageName::new(request.name()).map_err(|e| ModuleError::Usage(e.to_string()))?,
         sender: name.clone(),
         context: None,
         node: None,

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use tca_central::StartOptions;
 use tca_messages::control::{Registration, TaskOutcome};
-use tca_messages::{Class, DataFormat, MessageName, SendOptions, decode_data, encode_data};
+use tca_messages::{Class, DataFormat, MessageName, decode_data, encode_data};
 use tca_module::{Connector, HandlerError, Module, ModuleError};
 
 async fn within<T>(f: impl std::future::Future<Output = T>) -> T {
@@ -27,7 +27,7 @@ fn registration(name: &str, class: Class, reply: Option<DataFormat>) -> Registra
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn raw_handlers_answer_raw_sends_and_see_who_asked() {
     let central = tca_central::start(StartOptions::default()).await.unwrap();
-    let connector = Connector::InProcess(central.handle());
+    let connector = Connector::from(central.in_process());
     let (seen_tx, mut seen_rx) = tokio::sync::mpsc::unbounded_channel();
     let seen = seen_tx.clone();
     let _doubler = within(
@@ -71,15 +71,7 @@ async fn raw_handlers_answer_raw_sends_and_see_who_asked() {
     );
 
     let task = asker
-        .send_raw(
-            Class::Goal,
-            "refuse",
-            encode_data(&1u32).unwrap(),
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
-        )
+        .send_watched_raw(Class::Goal, "refuse", encode_data(&1u32).unwrap(), [])
         .unwrap();
     match within(task.outcome()).await.unwrap() {
         TaskOutcome::Failed(reason) => assert!(reason.contains("refused on purpose"), "{reason}"),
@@ -92,19 +84,11 @@ async fn raw_handlers_answer_raw_sends_and_see_who_asked() {
 
     // Queries go through query_raw; options only apply to goals and commands.
     let err = asker
-        .send_raw(Class::Query, "double", vec![], SendOptions::default())
+        .send_raw(Class::Query, "double", vec![], [])
         .unwrap_err();
     assert!(matches!(err, ModuleError::Usage(_)), "{err}");
     let err = asker
-        .send_raw(
-            Class::Inform,
-            "double",
-            vec![],
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
-        )
+        .send_watched_raw(Class::Inform, "double", vec![], [])
         .unwrap_err();
     assert!(err.to_string().contains("goals and commands only"), "{err}");
     central.shutdown().await.unwrap();
@@ -113,7 +97,7 @@ async fn raw_handlers_answer_raw_sends_and_see_who_asked() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn raw_registrations_are_checked_before_connecting() {
     let central = tca_central::start(StartOptions::default()).await.unwrap();
-    let connector = Connector::InProcess(central.handle());
+    let connector = Connector::from(central.in_process());
     // A query without a reply format.
     let err = within(
         Module::builder("bad")

@@ -10,7 +10,7 @@ use std::time::Duration;
 use common::{STEP, free_endpoint, within};
 use serde::{Deserialize, Serialize};
 use tca_central::{RunningCentral, StartOptions};
-use tca_module::{Connector, Module, ModuleError, SendOptions};
+use tca_module::{Connector, Module, ModuleError};
 
 /// Echo: a query answered with its argument.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -71,15 +71,7 @@ async fn modules_rejoin_a_central_that_came_back() {
         let client = client.clone();
         tokio::spawn(async move { client.query(&Slow).await })
     };
-    let parked = client
-        .send_task(
-            &Park,
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
-        )
-        .unwrap();
+    let parked = client.send_watched(&Park, []).unwrap();
     tokio::time::sleep(Duration::from_millis(200)).await;
 
     central.shutdown().await.unwrap();
@@ -132,15 +124,7 @@ async fn modules_rejoin_a_central_that_came_back() {
     );
     assert_eq!(registry.modules.len(), 2, "{registry:?}");
     // Goals flow again too: the new central keeps the new goal's node while it runs.
-    let parked = client
-        .send_task(
-            &Park,
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
-        )
-        .unwrap();
+    let parked = client.send_watched(&Park, []).unwrap();
     tokio::time::sleep(Duration::from_millis(100)).await;
     let tree = within("tree", client.tree()).await.unwrap();
     assert!(tree.text.contains("park"), "{}", tree.text);
@@ -151,7 +135,7 @@ async fn modules_rejoin_a_central_that_came_back() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn in_process_modules_never_go_offline() {
     let central = tca_central::start(StartOptions::default()).await.unwrap();
-    let connector = Connector::InProcess(central.handle());
+    let connector = Connector::from(central.in_process());
     let server = within("server connects", server(&connector)).await;
     assert!(server.is_online());
     assert!(server.wait_online(Duration::from_millis(10)).await);

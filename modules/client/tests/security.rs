@@ -17,7 +17,7 @@ use tca_central::policy::hash_secret;
 use tca_central::{CentralConfig, Policy, RunningCentral, StartOptions};
 use tca_messages::RouteError;
 use tca_messages::control::TaskOutcome;
-use tca_module::{Connector, Module, ModuleError, SendOptions};
+use tca_module::{Connector, Module, ModuleError};
 
 /// Echo: a query answered with its argument.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -212,15 +212,7 @@ async fn permitted_and_refused_traffic(connector: &Connector, central: &RunningC
     // module is told asynchronously; the next permitted exchange proves it was handled first.
     let before = maps.load(Ordering::Relaxed);
     echo_sender.inform(&MapUpdate(vec![9])).unwrap();
-    let goal = echo_sender
-        .send_task(
-            &Work(1),
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
-        )
-        .unwrap();
+    let goal = echo_sender.send_watched(&Work(1), []).unwrap();
     match within("refused goal", goal.outcome()).await {
         Err(ModuleError::Route(RouteError::NotPermitted { name, .. })) => assert_eq!(name, "work"),
         other => panic!("expected NotPermitted for the goal, got {other:?}"),
@@ -245,7 +237,7 @@ async fn policy_in_process() {
         ..CentralConfig::default()
     };
     let (central, _) = start(config, false, Some(&log)).await;
-    let connector = Connector::InProcess(central.handle());
+    let connector = Connector::from(central.in_process());
     refusals_at_hello(&connector).await;
     permitted_and_refused_traffic(&connector, &central).await;
     central.shutdown().await.unwrap();
@@ -296,7 +288,7 @@ async fn policy_over_zenoh_with_zenoh_login() {
 
     // No zenoh login, or a wrong one: refused by zenoh when the session opens.
     for connector in [
-        Connector::Zenoh(vec![endpoint.clone()]),
+        Connector::zenoh(endpoint.clone()),
         Connector::zenoh_with_login(&endpoint, "tca-modules", "wrong"),
         Connector::zenoh_with_login(&endpoint, "nobody", "zenoh-pass-1"),
     ] {
@@ -383,11 +375,7 @@ async fn flood(connector: &Connector, central: &RunningCentral, exact: bool) {
             while !stop.load(Ordering::Relaxed) && i < 50_000 {
                 i += 1;
                 let r = if i.is_multiple_of(8) {
-                    let options = SendOptions {
-                        notify: true,
-                        ..SendOptions::default()
-                    };
-                    flooder.send_task(&Work(i), options).map(|t| tasks.push(t))
+                    flooder.send_watched(&Work(i), []).map(|t| tasks.push(t))
                 } else {
                     flooder
                         .inform(&MapUpdate(payload.clone()))
@@ -477,7 +465,7 @@ fn flood_config(zenoh_users: Option<&Path>) -> CentralConfig {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn flooding_module_is_throttled_in_process() {
     let (central, _) = start(flood_config(None), false, None).await;
-    flood(&Connector::InProcess(central.handle()), &central, true).await;
+    flood(&Connector::from(central.in_process()), &central, true).await;
     central.shutdown().await.unwrap();
 }
 

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{Client, builtin_fast, central, in_air, notify, within};
+use common::{Client, builtin_fast, central, in_air, within};
 use nalgebra::Point3;
 use tca_controller_sim::SpeedFactor;
 use tca_controller_sim::sim::{FaultConfig, LegSimulator};
@@ -323,7 +323,7 @@ async fn queries_answer_while_a_move_plays_out() {
     let target = q.vertical_m + 0.36;
     let task = gait
         .module
-        .send_task(
+        .send_watched(
             &LegMove {
                 waypoints: vec![Joints {
                     vertical_m: target,
@@ -331,7 +331,7 @@ async fn queries_answer_while_a_move_plays_out() {
                 }],
                 transition: false,
             },
-            notify(),
+            [],
         )
         .unwrap();
     let outcome = tokio::spawn(task.outcome());
@@ -378,7 +378,7 @@ async fn moves_advance_the_bus_simulated_time() {
         }],
         transition: false,
     };
-    let task = user.send_task(&lift, notify()).unwrap();
+    let task = user.send_watched(&lift, []).unwrap();
     let outcome = within("legMove ends", task.outcome()).await.unwrap();
     assert_eq!(outcome, TaskOutcome::Achieved);
     // The user's clock moved on by the move's simulated duration, though nothing waited.

@@ -8,7 +8,7 @@ mod common;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use common::{Client, builtin_fast, central, notify, within};
+use common::{Client, builtin_fast, central, within};
 use tca_messages::control::TaskOutcome;
 use tca_messages::walking::{
     BodyMove, BodyPose, BodyPosition, CarriagePoint, CartLegPosition, ControllerState,
@@ -117,7 +117,7 @@ async fn look_and_step(client: &Module) -> (f64, WorldPoint, f64, TaskOutcome) {
         }],
         transition: false,
     };
-    let task = client.send_task(&lift, notify()).unwrap();
+    let task = client.send_watched(&lift, []).unwrap();
     let outcome = within("legMove ends", task.outcome()).await.unwrap();
     let status = within("controllerStatus", client.query(&ControllerStatus))
         .await

@@ -21,8 +21,7 @@ use tca_messages::walking::{
     PlanStep, RecoverLeg, StepPlanned, WorldPoint,
 };
 use tca_module::{
-    ComputeTime, Connector, ConstraintSpec, Context, HandlerError, Module, ModuleError,
-    SendOptions, TaskRef,
+    ComputeTime, Connector, ConstraintSpec, Context, HandlerError, Module, ModuleError, TaskRef,
 };
 use tca_robot::LegParams;
 
@@ -210,13 +209,9 @@ impl Shared {
         };
         // The leg move. Planned ahead, it waits for the previous body move: the leg's
         // trajectory starts from where that move leaves it.
-        let mut leg_options = SendOptions::default();
-        if let Some(previous) = step.after_body_move {
-            leg_options.constraints.push(ConstraintSpec::delay_planning(
-                TaskRef::Message(previous),
-                TaskRef::This,
-            ));
-        }
+        let leg_constraints = step.after_body_move.map(|previous| {
+            ConstraintSpec::delay_planning(TaskRef::Message(previous), TaskRef::This)
+        });
         let elbow = Some(match plan.elbow {
             tca_robot::ElbowBranch::Positive => ElbowSide::Positive,
             tca_robot::ElbowBranch::Negative => ElbowSide::Negative,
@@ -227,19 +222,16 @@ impl Shared {
                 body_y_m,
                 elbow,
             },
-            leg_options,
+            leg_constraints,
         )?;
         let body = ctx.send_task(
             &BodyMove {
                 target_y_m: plan.body_target_y_m,
             },
-            SendOptions {
-                constraints: vec![ConstraintSpec::sequential_achievement(
-                    leg.task_ref(),
-                    TaskRef::This,
-                )],
-                ..SendOptions::default()
-            },
+            [ConstraintSpec::sequential_achievement(
+                leg.task_ref(),
+                TaskRef::This,
+            )],
         )?;
         if let Err(e) = ctx.inform(&StepPlanned {
             step: step.step,
@@ -269,7 +261,7 @@ impl Shared {
             let walk_ctx = ctx.in_context(Some(walk));
             let next = crate::walk::next_step(&step, plan.body_target_y_m, footfall, body.id());
             self.walks.step_sent(walk, next.step);
-            walk_ctx.send_task(&next, crate::walk::next_step_options(&step, &body))?;
+            walk_ctx.send_task(&next, crate::walk::next_step_constraints(&step, &body))?;
         }
         Ok(())
     }

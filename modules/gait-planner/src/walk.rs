@@ -24,9 +24,7 @@ use tca_messages::walking::{
     HardwareFault, MoveFailed, PlanStep, StepStart, Walk, WalkMode, WorldPoint,
 };
 use tca_messages::{MessageId, NodeId};
-use tca_module::{
-    ConstraintSpec, Context, HandlerError, ModuleBuilder, SendOptions, Task, TaskRef,
-};
+use tca_module::{ConstraintSpec, Context, HandlerError, ModuleBuilder, Task, TaskRef};
 
 /// What the module remembers of each walk in progress.
 #[derive(Debug, Clone)]
@@ -153,15 +151,9 @@ pub fn next_step(
 
 /// The constraints the next step is sent with: sequentially, it is not planned before this
 /// step's body move is achieved.
-pub fn next_step_options(step: &PlanStep, body_move: &Task) -> SendOptions {
-    let mut options = SendOptions::default();
-    if step.mode == WalkMode::Sequential {
-        options.constraints.push(ConstraintSpec::delay_planning(
-            body_move.task_ref(),
-            TaskRef::This,
-        ));
-    }
-    options
+pub fn next_step_constraints(step: &PlanStep, body_move: &Task) -> Option<ConstraintSpec> {
+    (step.mode == WalkMode::Sequential)
+        .then(|| ConstraintSpec::delay_planning(body_move.task_ref(), TaskRef::This))
 }
 
 /// `moveFailed` at the walk node: plan again from where the leg is.

@@ -19,7 +19,7 @@ use tca_messages::walking::{
     BodyMove, BodyPose, BodyPosition, GlobalLegPosition, JointLegPosition, Joints, LegMove,
     MapKind, MapRegion, PlanStep, StepPlanned, WorldPoint,
 };
-use tca_module::{Connector, HandlerError, Module, SendOptions};
+use tca_module::{Connector, HandlerError, Module};
 use tca_robot::{Course, ElbowBranch, HeightField, JointPosition, LegParams};
 use tokio::sync::mpsc;
 
@@ -52,7 +52,7 @@ async fn scene(terrain: HeightField, body_y: f64, foot: Point2<f64>) -> Scene {
     let central = within("central", tca_central::start(StartOptions::default()))
         .await
         .unwrap();
-    let connector = Connector::InProcess(central.handle());
+    let connector = Connector::from(central.in_process());
     let sim = LegSimulator::new(
         LegParams::default(),
         terrain.clone(),
@@ -191,7 +191,7 @@ async fn scene(terrain: HeightField, body_y: f64, foot: Point2<f64>) -> Scene {
 
 async fn plan_step(client: &Module, step: u32, goal_y_m: f64) -> TaskOutcome {
     let task = client
-        .send_task(
+        .send_watched(
             &PlanStep {
                 step,
                 goal_y_m,
@@ -199,10 +199,7 @@ async fn plan_step(client: &Module, step: u32, goal_y_m: f64) -> TaskOutcome {
                 start: None,
                 after_body_move: None,
             },
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
+            [],
         )
         .unwrap();
     within("planStep ends", task.outcome()).await.unwrap()

@@ -41,7 +41,7 @@ async fn acquire_image_is_tagged_with_the_controllers_pose() {
     let central = within("central", tca_central::start(StartOptions::default()))
         .await
         .unwrap();
-    let c = Connector::InProcess(central.handle());
+    let c = Connector::from(central.in_process());
     let _controller = within("controller", controller(&c, 2.5)).await;
     let params = LegParams::default();
     let config =
@@ -105,7 +105,7 @@ async fn a_stored_sequence_serves_its_images_in_order() {
     let central = within("central", tca_central::start(StartOptions::default()))
         .await
         .unwrap();
-    let c = Connector::InProcess(central.handle());
+    let c = Connector::from(central.in_process());
     let _controller = within("controller", controller(&c, 7.0)).await;
     let stored = StoredSequence::open(dir.path(), SensorKind::Perceptron, false).unwrap();
     let _ism = within(
@@ -136,7 +136,7 @@ async fn two_sensors_of_one_kind_are_refused() {
     let central = within("central", tca_central::start(StartOptions::default()))
         .await
         .unwrap();
-    let c = Connector::InProcess(central.handle());
+    let c = Connector::from(central.in_process());
     let params = LegParams::default();
     let config = IsmConfig::simulated(flat(), &params, 0).with_sensor(VirtualScanner::new(
         SensorSpec::erim(),

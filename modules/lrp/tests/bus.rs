@@ -21,7 +21,7 @@ use tca_messages::walking::{
     MapCell, MapGrid, MapKind, MapRegion, MoveFailed, MoveFailureKind, PlanePoint, RecoverLeg,
     WorldPoint,
 };
-use tca_module::{Connector, HandlerError, Module, SendOptions};
+use tca_module::{Connector, HandlerError, Module};
 use tca_robot::{Course, ElbowBranch, HeightField, JointPosition, LegParams};
 use tokio::sync::mpsc;
 
@@ -53,7 +53,7 @@ async fn scene(terrain: HeightField, body_y: f64, foot: Point2<f64>) -> Scene {
     let central = within("central", tca_central::start(StartOptions::default()))
         .await
         .unwrap();
-    let connector = Connector::InProcess(central.handle());
+    let connector = Connector::from(central.in_process());
     let branch = ElbowBranch::of(&common::planted(
         &terrain,
         body_y,
@@ -178,7 +178,7 @@ async fn recover_leg_moves_the_foot_around_the_sun_box() {
         .await
         .unwrap();
     let task = client
-        .send_task(
+        .send_watched(
             &RecoverLeg {
                 footfall: WorldPoint {
                     x_m: ff.x,
@@ -188,10 +188,7 @@ async fn recover_leg_moves_the_foot_around_the_sun_box() {
                 body_y_m: 2.0,
                 elbow: None,
             },
-            SendOptions {
-                notify: true,
-                ..SendOptions::default()
-            },
+            [],
         )
         .unwrap();
     let outcome = within("recoverLeg achieved", task.outcome()).await.unwrap();

@@ -26,7 +26,7 @@ async fn map_region_takes_an_image_when_it_has_none_or_is_asked_to() {
     let central = within("central", tca_central::start(StartOptions::default()))
         .await
         .unwrap();
-    let c = Connector::InProcess(central.handle());
+    let c = Connector::from(central.in_process());
     let poses = Arc::new(AtomicUsize::new(0));
     let counter = poses.clone();
     let _controller = within(

@@ -13,7 +13,7 @@ use tca_messages::control::TaskOutcome;
 use tca_messages::walking::{
     BodyPose, BodyPosition, MapKind, MapRegion, Overlay, PlanePoint, RenderMap, WorldPoint,
 };
-use tca_module::{Connector, Module, SendOptions};
+use tca_module::{Connector, Module};
 use tca_pdm::{PdmConfig, RenderOptions, render_map};
 use tca_robot::{HeightField, LegParams};
 
@@ -40,7 +40,7 @@ async fn render_map_writes_a_picture_of_the_ltm_map() {
     let central = within("central", tca_central::start(StartOptions::default()))
         .await
         .unwrap();
-    let c = Connector::InProcess(central.handle());
+    let c = Connector::from(central.in_process());
     let _controller = within(
         "controller",
         Module::builder("controller")
@@ -77,11 +77,6 @@ async fn render_map_writes_a_picture_of_the_ltm_map() {
     let client = within("client", Module::builder("client").connect(&c))
         .await
         .unwrap();
-    let notify = SendOptions {
-        notify: true,
-        ..SendOptions::default()
-    };
-
     let command = RenderMap {
         region: region(MapKind::Footfall),
         overlays: vec![Overlay::Point {
@@ -94,7 +89,7 @@ async fn render_map_writes_a_picture_of_the_ltm_map() {
         }],
         path: "footfall.png".into(),
     };
-    let task = client.send_task(&command, notify.clone()).unwrap();
+    let task = client.send_watched(&command, []).unwrap();
     let outcome = within("renderMap", task.outcome()).await.unwrap();
     assert_eq!(outcome, TaskOutcome::Achieved);
     let file = std::fs::File::open(dir.path().join("footfall.png")).unwrap();
@@ -118,7 +113,7 @@ async fn render_map_writes_a_picture_of_the_ltm_map() {
         path: "no/such/dir/x.png".into(),
         ..command.clone()
     };
-    let task = client.send_task(&unwritable, notify.clone()).unwrap();
+    let task = client.send_watched(&unwritable, []).unwrap();
     match within("unwritable", task.outcome()).await.unwrap() {
         TaskOutcome::Failed(reason) => assert!(reason.contains("cannot write"), "{reason}"),
         other => panic!("{other:?}"),
@@ -130,7 +125,7 @@ async fn render_map_writes_a_picture_of_the_ltm_map() {
         },
         ..command
     };
-    let task = client.send_task(&bad_region, notify).unwrap();
+    let task = client.send_watched(&bad_region, []).unwrap();
     match within("bad region", task.outcome()).await.unwrap() {
         TaskOutcome::Failed(reason) => {
             assert!(reason.contains("resolution 0 m is not valid"), "{reason}")

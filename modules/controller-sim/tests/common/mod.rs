@@ -15,7 +15,7 @@ use tca_controller_sim::{ControllerConfig, SpeedFactor};
 use tca_messages::NodeId;
 use tca_messages::control::TaskOutcome;
 use tca_messages::walking::{BodyMove, HardwareFault, LegMove, MoveFailed, SetTransForce};
-use tca_module::{Connector, HandlerError, Module, SendOptions};
+use tca_module::{Connector, HandlerError, Module};
 use tca_robot::{CarriagePose, ElbowBranch, HeightField, LegKinematics, LegParams};
 use tokio::sync::mpsc;
 
@@ -38,7 +38,7 @@ pub async fn central() -> (RunningCentral, Connector) {
     )
     .await
     .expect("central starts");
-    let connector = Connector::InProcess(central.handle());
+    let connector = Connector::from(central.in_process());
     (central, connector)
 }
 
@@ -133,9 +133,9 @@ impl Client {
                         ctx.on_exception::<MoveFailed>(node).await?;
                         ctx.on_exception::<HardwareFault>(node).await?;
                         let task = match &attempt.command {
-                            Command::Leg(m) => ctx.send_task(m, notify()),
-                            Command::Body(m) => ctx.send_task(m, notify()),
-                            Command::Force(m) => ctx.send_task(m, notify()),
+                            Command::Leg(m) => ctx.send_watched(m, []),
+                            Command::Body(m) => ctx.send_watched(m, []),
+                            Command::Force(m) => ctx.send_watched(m, []),
                         }?;
                         // Wait for the outcome outside the handler: a failed child fails this
                         // goal too, and central then cancels a handler still running.
@@ -209,14 +209,6 @@ fn assert_raised_below(raised_at: Option<NodeId>, attached_at: Option<NodeId>) {
         raised_at, attached_at,
         "raised by the command, not the goal"
     );
-}
-
-/// Options asking central to report how a command ends.
-pub fn notify() -> SendOptions {
-    SendOptions {
-        notify: true,
-        ..SendOptions::default()
-    }
 }
 
 /// Flat ground at z = 0 over the whole pit.

@@ -6,22 +6,29 @@
 //! once) or [`Inbox::push_or_refuse`] (zenoh: a refused frame's header is kept aside, up to
 //! [`MAX_REFUSALS`], so central can answer it with an error; past that it is only counted and
 //! the module told once). The first push into an
-//! idle inbox wakes the driver with [`Input::Ready`].
+//! idle inbox wakes the hub with [`LinkSignal::Ready`].
 
 use std::collections::VecDeque;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use bytes::Bytes;
 use tca_messages::RouteError;
-use tokio::sync::mpsc;
 
-use crate::CentralError;
-use crate::core::{InboxUse, LinkId};
-use crate::runtime::Input;
+use crate::hub::{Hub, LinkSignal};
+use crate::{LinkError, LinkId};
+
+/// How full a link's inbox was when a frame was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct InboxUse {
+    /// Frames waiting.
+    pub frames: u64,
+    /// Their bytes.
+    pub bytes: u64,
+}
 
 /// Most refused frames of one link kept to be answered (as headers of ~100 bytes each); more
 /// are dropped and counted.
-pub(crate) const MAX_REFUSALS: usize = 65_536;
+pub const MAX_REFUSALS: usize = 65_536;
 
 /// The frame with its data removed: enough for central to answer it. Undecodable frames are
 /// kept as their first 64 bytes, for the problem record.
@@ -41,7 +48,7 @@ fn header_only(frame: &Bytes) -> Bytes {
 
 /// Something the driver takes out of an inbox.
 #[derive(Debug)]
-pub(crate) enum Taken {
+pub enum Taken {
     /// A frame to handle.
     Frame(Bytes),
     /// A frame refused because the inbox was full, to answer with an error.
@@ -72,23 +79,20 @@ impl State {
     }
 }
 
-/// One link's inbox.
+/// One link's inbox: frames the module sent that central has not handled yet.
 #[derive(Debug)]
-pub(crate) struct Inbox {
+pub struct Inbox {
     link: LinkId,
     max_frames: u64,
     max_bytes: u64,
-    wake: mpsc::UnboundedSender<Input>,
+    wake: Arc<dyn Hub>,
     state: Mutex<State>,
 }
 
 impl Inbox {
-    pub(crate) fn new(
-        link: LinkId,
-        max_frames: u32,
-        max_bytes: u64,
-        wake: mpsc::UnboundedSender<Input>,
-    ) -> Self {
+    /// An empty inbox of link `link` holding at most `max_frames` frames and `max_bytes`
+    /// bytes (one frame always fits an empty inbox), waking `wake` when it gets something.
+    pub fn new(link: LinkId, max_frames: u32, max_bytes: u64, wake: Arc<dyn Hub>) -> Self {
         Inbox {
             link,
             max_frames: u64::from(max_frames.max(1)),
@@ -112,34 +116,40 @@ impl Inbox {
         })
     }
 
-    fn schedule(&self, s: &mut State) -> Result<(), CentralError> {
+    fn schedule(&self, s: &mut State) -> Result<(), LinkError> {
         if !s.scheduled {
             s.scheduled = true;
-            self.wake
-                .send(Input::Ready(self.link))
-                .map_err(|_| CentralError::Stopped)?;
+            if !self.wake.signal(LinkSignal::Ready(self.link)) {
+                return Err(LinkError::Stopped);
+            }
         }
         Ok(())
     }
 
-    /// Queues a frame, or refuses it when the inbox is full.
-    pub(crate) fn push(&self, frame: Bytes) -> Result<(), CentralError> {
-        if self.wake.is_closed() {
-            return Err(CentralError::Stopped);
+    /// The link's number.
+    pub fn link(&self) -> LinkId {
+        self.link
+    }
+
+    /// Queues a frame, or refuses it when the inbox is full ([`LinkError::Refused`] with an
+    /// over-limit error naming the setting; the frame is not queued).
+    pub fn push(&self, frame: Bytes) -> Result<(), LinkError> {
+        if self.wake.stopped() {
+            return Err(LinkError::Stopped);
         }
         let mut s = self.lock();
         if s.closed {
-            return Err(CentralError::Stopped);
+            return Err(LinkError::Stopped);
         }
         if let Some(used) = self.over(&s, frame.len()) {
-            return Err(CentralError::Refused(self.refusal(used)));
+            return Err(LinkError::Refused(self.refusal(used)));
         }
         s.queue(frame);
         self.schedule(&mut s)
     }
 
     /// Queues a frame; a refused one is kept aside (bounded) for central to answer.
-    pub(crate) fn push_or_refuse(&self, frame: Bytes) {
+    pub fn push_or_refuse(&self, frame: Bytes) {
         let mut s = self.lock();
         if s.closed {
             return;
@@ -180,7 +190,7 @@ impl Inbox {
 
     /// Takes the next item, and whether more remain. When none remain the inbox is marked idle,
     /// so the next push wakes the driver again.
-    pub(crate) fn take(&self) -> (Option<Taken>, bool) {
+    pub fn take(&self) -> (Option<Taken>, bool) {
         let mut s = self.lock();
         let item = if let Some(f) = s.frames.pop_front() {
             s.bytes -= f.len() as u64;
@@ -200,12 +210,12 @@ impl Inbox {
     }
 
     /// The most frames and bytes that have waited in this inbox at once.
-    pub(crate) fn high_water(&self) -> (u64, u64) {
+    pub fn high_water(&self) -> (u64, u64) {
         self.lock().high
     }
 
     /// Stops accepting frames (the link closed).
-    pub(crate) fn close(&self) {
+    pub fn close(&self) {
         let mut s = self.lock();
         s.closed = true;
         s.frames.clear();
@@ -218,32 +228,43 @@ impl Inbox {
 mod tests {
     use super::*;
 
-    fn inbox(frames: u32, bytes: u64) -> (Inbox, mpsc::UnboundedReceiver<Input>) {
-        let (tx, rx) = mpsc::unbounded_channel();
-        (Inbox::new(7, frames, bytes, tx), rx)
+    use crate::hub::testing::Recorder;
+
+    fn inbox(frames: u32, bytes: u64) -> (Inbox, Arc<Recorder>) {
+        let hub = Arc::new(Recorder::default());
+        (Inbox::new(7, frames, bytes, hub.clone()), hub)
     }
 
     #[test]
     fn wakes_once_until_served_dry() {
-        let (inbox, mut rx) = inbox(10, 1000);
+        let (inbox, hub) = inbox(10, 1000);
         inbox.push(Bytes::from_static(b"a")).unwrap();
         inbox.push(Bytes::from_static(b"b")).unwrap();
-        assert!(matches!(rx.try_recv(), Ok(Input::Ready(7))));
-        assert!(rx.try_recv().is_err());
+        assert_eq!(hub.take(), [LinkSignal::Ready(7)]);
         assert!(matches!(inbox.take(), (Some(Taken::Frame(_)), true)));
         assert!(matches!(inbox.take(), (Some(Taken::Frame(_)), false)));
         inbox.push(Bytes::from_static(b"c")).unwrap();
-        assert!(matches!(rx.try_recv(), Ok(Input::Ready(7))));
+        assert_eq!(hub.take(), [LinkSignal::Ready(7)]);
+    }
+
+    #[test]
+    fn a_stopped_hub_refuses_pushes() {
+        let (inbox, hub) = inbox(10, 1000);
+        hub.stopped.store(true, std::sync::atomic::Ordering::SeqCst);
+        assert!(matches!(
+            inbox.push(Bytes::from_static(b"a")),
+            Err(LinkError::Stopped)
+        ));
     }
 
     #[test]
     fn full_inbox_refuses_with_the_limit_named() {
-        let (inbox, _rx) = inbox(2, 1000);
+        let (inbox, _hub) = inbox(2, 1000);
         inbox.push(Bytes::from_static(b"a")).unwrap();
         inbox.push(Bytes::from_static(b"b")).unwrap();
         let err = inbox.push(Bytes::from_static(b"c")).unwrap_err();
         assert!(err.to_string().contains("max_inbox_frames"), "{err}");
-        let (inbox, _rx) = super::tests::inbox(100, 10);
+        let (inbox, _hub) = super::tests::inbox(100, 10);
         // One frame always fits an empty inbox.
         inbox.push(Bytes::from(vec![0u8; 50])).unwrap();
         let err = inbox.push(Bytes::from_static(b"x")).unwrap_err();
@@ -252,7 +273,7 @@ mod tests {
 
     #[test]
     fn refused_frames_are_kept_then_counted() {
-        let (inbox, _rx) = inbox(1, 1000);
+        let (inbox, _hub) = inbox(1, 1000);
         for _ in 0..MAX_REFUSALS + 3 {
             inbox.push_or_refuse(Bytes::from_static(b"a"));
         }

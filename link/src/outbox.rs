@@ -2,18 +2,16 @@
 //! taken yet (an in-process module's receive loop, or central's zenoh publisher for that
 //! module), bounded by `max_outbox_frames` and `max_outbox_bytes`.
 //!
-//! The frames travel over a tokio channel; a gauge shared by both ends counts them. The
-//! driver counts each frame in as it sends it and never waits: the bound acts through the core
-//! instead of by blocking (see the core's `congestion` module).
+//! The frames travel over a tokio channel; a gauge shared by both ends counts them. Central's
+//! driver counts each frame in as it sends it and never waits: the bound acts through central's
+//! routing instead of by blocking.
 //!
 //! - At half the bound the link is **congested**: the core gives its module no new work, and
 //!   the driver *watches* the gauge.
 //! - When the receiver has taken a watched outbox down to a quarter of the bound, the gauge
-//!   wakes the driver, which reports the level to the core
-//!   ([`Event::OutboxLevel`](crate::Event::OutboxLevel)); the core delivers what it held.
+//!   wakes the hub ([`LinkSignal::Drained`]), and central delivers what it held.
 //! - Past the bound (only a module that does not read the answers to its own requests gets
-//!   there), the module is disconnected as too slow
-//!   ([`Event::OutboxFull`](crate::Event::OutboxFull)).
+//!   there), the module is disconnected as too slow.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::SeqCst};
@@ -21,21 +19,30 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering::SeqCst};
 use bytes::Bytes;
 use tokio::sync::mpsc;
 
-use crate::core::{LinkId, OutboxUse};
-use crate::runtime::Input;
+use crate::LinkId;
+use crate::hub::{Hub, LinkSignal};
+
+/// How full a link's outbox is.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct OutboxUse {
+    /// Frames not yet taken by the link.
+    pub frames: u64,
+    /// Their bytes.
+    pub bytes: u64,
+}
 
 /// The bound of every outbox, and the marks derived from it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct OutboxLimits {
+pub struct OutboxLimits {
     /// Most frames (one frame always fits an empty outbox).
-    pub(crate) frames: u64,
+    pub frames: u64,
     /// Most bytes.
-    pub(crate) bytes: u64,
+    pub bytes: u64,
 }
 
 impl OutboxLimits {
     /// The limits `max_outbox_frames` and `max_outbox_bytes`.
-    pub(crate) fn new(frames: u32, bytes: u64) -> Self {
+    pub fn new(frames: u32, bytes: u64) -> Self {
         OutboxLimits {
             frames: u64::from(frames.max(1)),
             bytes: bytes.max(1),
@@ -43,7 +50,7 @@ impl OutboxLimits {
     }
 
     /// At or past this level (frames or bytes) the link is congested.
-    pub(crate) fn congested(&self, frames: u64, bytes: u64) -> bool {
+    pub fn congested(&self, frames: u64, bytes: u64) -> bool {
         frames >= (self.frames / 2).max(1) || bytes >= (self.bytes / 2).max(1)
     }
 
@@ -53,7 +60,7 @@ impl OutboxLimits {
     }
 
     /// Past the bound: the module is disconnected.
-    pub(crate) fn over(&self, frames: u64, bytes: u64) -> bool {
+    pub fn over(&self, frames: u64, bytes: u64) -> bool {
         frames > 1 && (frames > self.frames || bytes > self.bytes)
     }
 }
@@ -61,22 +68,20 @@ impl OutboxLimits {
 /// The level of one outbox, shared by the driver (which counts frames in) and the receiver
 /// (which counts them out).
 #[derive(Debug)]
-pub(crate) struct Gauge {
+pub struct Gauge {
     link: LinkId,
     limits: OutboxLimits,
     frames: AtomicU64,
     bytes: AtomicU64,
     /// The driver waits for the level to fall to the drained mark.
     watch: AtomicBool,
-    wake: mpsc::UnboundedSender<Input>,
+    wake: Arc<dyn Hub>,
 }
 
 impl Gauge {
-    pub(crate) fn new(
-        link: LinkId,
-        limits: OutboxLimits,
-        wake: mpsc::UnboundedSender<Input>,
-    ) -> Self {
+    /// The gauge of link `link`'s outbox, bounded by `limits`, waking `wake` when a watched
+    /// level drains.
+    pub fn new(link: LinkId, limits: OutboxLimits, wake: Arc<dyn Hub>) -> Self {
         Gauge {
             link,
             limits,
@@ -88,7 +93,7 @@ impl Gauge {
     }
 
     /// Counts a frame of `len` bytes in; the level after it (frames, bytes).
-    pub(crate) fn added(&self, len: usize) -> (u64, u64) {
+    pub fn added(&self, len: usize) -> (u64, u64) {
         let len = len as u64;
         let frames = self.frames.fetch_add(1, SeqCst) + 1;
         let bytes = self.bytes.fetch_add(len, SeqCst) + len;
@@ -105,16 +110,16 @@ impl Gauge {
             && self.watch.load(SeqCst)
             && self.watch.swap(false, SeqCst)
         {
-            let _ = self.wake.send(Input::Drained(self.link));
+            let _ = self.wake.signal(LinkSignal::Drained(self.link));
         }
     }
 
     /// The level now (frames, bytes).
-    pub(crate) fn level(&self) -> (u64, u64) {
+    pub fn level(&self) -> (u64, u64) {
         (self.frames.load(SeqCst), self.bytes.load(SeqCst))
     }
 
-    /// Asks for an [`Input::Drained`] once the outbox is drained. Returns false when it already
+    /// Asks for a [`LinkSignal::Drained`] once the outbox is drained. Returns false when it already
     /// is (no wake will come then): the watch and the receiver's check are ordered so that
     /// exactly one of them sees the drained level.
     fn watch(&self) -> bool {
@@ -123,9 +128,9 @@ impl Gauge {
         !(self.limits.drained(frames, bytes) && self.watch.swap(false, SeqCst))
     }
 
-    /// The level now, for the core. A level at the congestion mark or above is watched: the
-    /// driver hears ([`Input::Drained`]) when the receiver has taken it down to a quarter.
-    pub(crate) fn measure(&self) -> OutboxUse {
+    /// The level now, for central. A level at the congestion mark or above is watched: the
+    /// hub hears ([`LinkSignal::Drained`]) when the receiver has taken it down to a quarter.
+    pub fn measure(&self) -> OutboxUse {
         let (frames, bytes) = self.level();
         if self.limits.congested(frames, bytes) && self.watch() {
             return OutboxUse { frames, bytes };
@@ -141,7 +146,7 @@ impl Gauge {
 /// For an in-process link it is the receiving end of the link's outbox, and taking frames from
 /// it is what frees room there: a module must keep reading it, or central stops giving it work
 /// and finally disconnects it as too slow. A transport that feeds a module from elsewhere (the
-/// module library's zenoh link) wraps its own channel with [`FrameReceiver::from`].
+/// zenoh client side) wraps its own channel with [`FrameReceiver::from`].
 #[derive(Debug)]
 pub struct FrameReceiver {
     rx: mpsc::UnboundedReceiver<Bytes>,
@@ -149,7 +154,8 @@ pub struct FrameReceiver {
 }
 
 impl FrameReceiver {
-    pub(crate) fn metered(rx: mpsc::UnboundedReceiver<Bytes>, gauge: Arc<Gauge>) -> Self {
+    /// The receiving end of an outbox whose level `gauge` counts.
+    pub fn metered(rx: mpsc::UnboundedReceiver<Bytes>, gauge: Arc<Gauge>) -> Self {
         FrameReceiver {
             rx,
             gauge: Some(gauge),
@@ -188,11 +194,17 @@ impl From<mpsc::UnboundedReceiver<Bytes>> for FrameReceiver {
 mod tests {
     use super::*;
 
-    fn gauge(frames: u32) -> (Arc<Gauge>, mpsc::UnboundedReceiver<Input>) {
-        let (tx, rx) = mpsc::unbounded_channel();
+    use crate::hub::testing::Recorder;
+
+    fn gauge(frames: u32) -> (Arc<Gauge>, Arc<Recorder>) {
+        let hub = Arc::new(Recorder::default());
         (
-            Arc::new(Gauge::new(3, OutboxLimits::new(frames, 1 << 30), tx)),
-            rx,
+            Arc::new(Gauge::new(
+                3,
+                OutboxLimits::new(frames, 1 << 30),
+                hub.clone(),
+            )),
+            hub,
         )
     }
 
@@ -208,7 +220,7 @@ mod tests {
 
     #[test]
     fn a_watched_gauge_wakes_the_driver_once_when_drained() {
-        let (g, mut wake) = gauge(8);
+        let (g, wake) = gauge(8);
         let (tx, rx) = mpsc::unbounded_channel();
         let mut receiver = FrameReceiver::metered(rx, g.clone());
         for _ in 0..5 {
@@ -220,18 +232,18 @@ mod tests {
         for left in [4, 3] {
             receiver.try_recv().unwrap();
             assert_eq!(g.level().0, left);
-            assert!(wake.try_recv().is_err(), "not drained at {left} frames");
+            assert!(wake.take().is_empty(), "not drained at {left} frames");
         }
         receiver.try_recv().unwrap();
-        assert!(matches!(wake.try_recv(), Ok(Input::Drained(3))));
+        assert_eq!(wake.take(), [LinkSignal::Drained(3)]);
         receiver.try_recv().unwrap();
-        assert!(wake.try_recv().is_err(), "one wake per watch");
+        assert!(wake.take().is_empty(), "one wake per watch");
         assert_eq!(g.level(), (1, 10));
     }
 
     #[test]
     fn measuring_watches_a_congested_gauge_only() {
-        let (g, mut wake) = gauge(8);
+        let (g, wake) = gauge(8);
         let (tx, rx) = mpsc::unbounded_channel();
         let mut receiver = FrameReceiver::metered(rx, g.clone());
         for _ in 0..3 {
@@ -248,7 +260,7 @@ mod tests {
         for _ in 0..3 {
             receiver.try_recv().unwrap();
         }
-        assert!(wake.try_recv().is_err(), "3 of 8 frames was not watched");
+        assert!(wake.take().is_empty(), "3 of 8 frames was not watched");
         for _ in 0..4 {
             g.added(1);
             tx.send(Bytes::from_static(b"x")).unwrap();
@@ -257,14 +269,14 @@ mod tests {
         for _ in 0..2 {
             receiver.try_recv().unwrap();
         }
-        assert!(matches!(wake.try_recv(), Ok(Input::Drained(3))));
+        assert_eq!(wake.take(), [LinkSignal::Drained(3)]);
     }
 
     #[test]
     fn watching_a_drained_gauge_says_so_instead_of_waking() {
-        let (g, mut wake) = gauge(8);
+        let (g, wake) = gauge(8);
         g.added(1);
         assert!(!g.watch());
-        assert!(wake.try_recv().is_err());
+        assert!(wake.take().is_empty());
     }
 }

@@ -1,0 +1,81 @@
+//! The module's simulated clock.
+//!
+//! A module built with `simulated_time(true)` stamps what it sends with simulated time. Each
+//! handler runs on a clock of its own, started by the module's [`HandlingClock`]
+//! (`tca_messages::sim_time`): a query or inform as of the time it was sent; a goal, command or
+//! exception when it was sent or when the module's previous one ended, whichever is later.
+//! A handler's clock follows the stamps of the answers it receives and advances by what it
+//! [`spend`](Module::spend)s. The module's own clock is the latest time any of them reached.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
+
+use tca_messages::{Class, now_ns};
+
+use super::Module;
+
+impl Module {
+    /// Whether this module stamps its messages with simulated time.
+    pub fn simulated_time(&self) -> bool {
+        self.shared.sim_time
+    }
+
+    /// The time this handle stamps on what it sends, in nanoseconds: simulated time (for a
+    /// module built with `simulated_time(true)`: the time its handler has reached, following
+    /// the time of every message it received), otherwise the wall clock (since the epoch).
+    pub fn time_ns(&self) -> u64 {
+        if !self.shared.sim_time {
+            return now_ns();
+        }
+        match &self.clock {
+            Some(c) => c.load(Ordering::Relaxed),
+            None => self.shared.base_clock.load(Ordering::Relaxed),
+        }
+    }
+
+    /// Charges `duration` of simulated time to the running handler (a move, a computation).
+    /// Does nothing for modules on the wall clock.
+    pub fn spend(&self, duration: Duration) {
+        if !self.shared.sim_time {
+            return;
+        }
+        let d = u64::try_from(duration.as_nanos()).unwrap_or(u64::MAX);
+        let t = match &self.clock {
+            Some(c) => c.fetch_add(d, Ordering::Relaxed).saturating_add(d),
+            None => self
+                .shared
+                .base_clock
+                .fetch_add(d, Ordering::Relaxed)
+                .saturating_add(d),
+        };
+        self.shared.base_clock.fetch_max(t, Ordering::Relaxed);
+    }
+
+    /// Moves simulated time forward to at least `t_ns` (a message from later arrived).
+    pub(crate) fn observe(&self, t_ns: u64) {
+        if !self.shared.sim_time {
+            return;
+        }
+        if let Some(c) = &self.clock {
+            c.fetch_max(t_ns, Ordering::Relaxed);
+        }
+        self.shared.base_clock.fetch_max(t_ns, Ordering::Relaxed);
+    }
+
+    /// The clock of a handler of a `class` message stamped `sent_ns` (simulated time only).
+    pub(crate) fn handler_clock(&self, class: Class, sent_ns: u64) -> Option<Arc<AtomicU64>> {
+        self.shared.sim_time.then(|| {
+            let start = self.shared.handling.start(class, sent_ns);
+            Arc::new(AtomicU64::new(start))
+        })
+    }
+
+    /// This handle's handler of a `class` message ended: the module's next goal, command or
+    /// exception starts no earlier.
+    pub(crate) fn handler_ended(&self, class: Class) {
+        if self.shared.sim_time {
+            self.shared.handling.ended(class, self.time_ns());
+        }
+    }
+}

@@ -1,0 +1,186 @@
+//! Central's control requests (registry, tree, kill, constraints, exception handlers, retry,
+//! monitors) and the link's life cycle (goodbye, abort, offline and online).
+
+use std::sync::atomic::Ordering;
+use std::time::Duration;
+
+use serde::de::DeserializeOwned;
+use tca_messages::control::{
+    Constrain, ControlRequest, Kill, Monitor, MonitorAction, OnException, Registry, Retry, TreeView,
+};
+use tca_messages::{
+    Class, ConstraintSpec, Message, MessageName, NodeId, decode_data, encode_data, kind,
+};
+
+use super::{Module, lock, route_error};
+use crate::error::{ModuleError, Result};
+
+impl Module {
+    /// The registry of every registered message.
+    pub async fn registry(&self) -> Result<Registry> {
+        self.control(ControlRequest::Registry).await
+    }
+
+    /// The live task trees, as text.
+    pub async fn tree(&self) -> Result<TreeView> {
+        self.control(ControlRequest::Tree).await
+    }
+
+    /// Kills a node and its subtree.
+    pub async fn kill(&self, node: NodeId) -> Result<()> {
+        self.control(ControlRequest::Kill(Kill { node })).await
+    }
+
+    /// Attaches this module as the handler of exception `E` raised at `node` or below (it must
+    /// have registered a handler for `E`). The handler gets the exception with its context's
+    /// node = `node` and [`Context::origin`](crate::Context::origin) = the raising node.
+    pub async fn on_exception<E: Message<Kind = kind::Exception>>(
+        &self,
+        node: NodeId,
+    ) -> Result<()> {
+        self.on_exception_raw(node, E::NAME).await
+    }
+
+    /// [`Module::on_exception`] for an exception given by name (tools that do not know its
+    /// Rust type).
+    pub async fn on_exception_raw(&self, node: NodeId, name: &str) -> Result<()> {
+        let name = MessageName::new(name).map_err(|e| ModuleError::Usage(e.to_string()))?;
+        self.control(ControlRequest::OnException(OnException { node, name }))
+            .await
+    }
+
+    /// Puts a node back to waiting so it is delivered again (in an exception handler: after
+    /// the raising node failed).
+    pub async fn retry(&self, node: NodeId) -> Result<()> {
+        self.control(ControlRequest::Retry(Retry { node })).await
+    }
+
+    /// Installs a point monitor on `node`: when its handler starts, central asks `condition`
+    /// (a query answering `bool`) once; `true` triggers `action`.
+    pub async fn point_monitor<Q: Message<Kind = kind::Query, Reply = bool>>(
+        &self,
+        node: NodeId,
+        condition: &Q,
+        action: MonitorAction,
+    ) -> Result<()> {
+        self.monitor(node, condition, None, action).await
+    }
+
+    /// Installs a polling monitor on `node`: while it is active, central asks `condition` every
+    /// `period`; the first `true` triggers `action`. It ends with the node.
+    pub async fn polling_monitor<Q: Message<Kind = kind::Query, Reply = bool>>(
+        &self,
+        node: NodeId,
+        condition: &Q,
+        period: Duration,
+        action: MonitorAction,
+    ) -> Result<()> {
+        let period_ms = u64::try_from(period.as_millis()).unwrap_or(u64::MAX).max(1);
+        self.monitor(node, condition, Some(period_ms), action).await
+    }
+
+    async fn monitor<Q: Message<Kind = kind::Query, Reply = bool>>(
+        &self,
+        node: NodeId,
+        condition: &Q,
+        period_ms: Option<u64>,
+        action: MonitorAction,
+    ) -> Result<()> {
+        let monitor = Monitor {
+            node,
+            query: MessageName::new(Q::NAME).map_err(|e| ModuleError::Usage(e.to_string()))?,
+            query_data: encode_data(condition)?,
+            period_ms,
+            action,
+        };
+        self.control(ControlRequest::Monitor(monitor)).await
+    }
+
+    /// Adds a temporal constraint between existing tasks.
+    pub async fn constrain(&self, constraint: ConstraintSpec) -> Result<()> {
+        self.control(ControlRequest::Constrain(Constrain { constraint }))
+            .await
+    }
+
+    /// Sends a control request and waits for central's answer.
+    async fn control<R: DeserializeOwned>(&self, request: ControlRequest) -> Result<R> {
+        let envelope =
+            self.envelope(Class::Control, request.name(), request.encode_data()?, None)?;
+        let answer = self.request(envelope, self.shared.query_timeout).await?;
+        match answer.class {
+            Class::Reply => Ok(decode_data(&answer.data)?),
+            _ => Err(route_error(&answer)),
+        }
+    }
+
+    /// Says goodbye to central and waits (at most 2 s) for it to acknowledge, so nothing sent
+    /// before is lost; later sends fail with [`ModuleError::Disconnected`].
+    pub async fn close(&self) {
+        let bye = ControlRequest::Bye;
+        if let Ok(env) = self.envelope(
+            Class::Control,
+            bye.name(),
+            bye.encode_data().unwrap_or_default(),
+            None,
+        ) {
+            let _ = self.request(env, Duration::from_secs(2)).await;
+        }
+        self.shared.closed.store(true, Ordering::Relaxed);
+        self.shared.closed_signal.send_replace(true);
+    }
+
+    /// Drops the link to central at once, without a goodbye, and stops every running handler:
+    /// what central sees when a module crashes. For testing recovery.
+    pub fn abort_link(&self) {
+        self.shared.closed.store(true, Ordering::Relaxed);
+        for (_, h) in lock(&self.shared.running).drain() {
+            h.abort();
+        }
+        drop(lock(&self.shared.keep).take());
+        self.shared.closed_signal.send_replace(true);
+    }
+
+    /// Resolves when the link to central closes (central stopped, or it closed the link).
+    pub async fn closed(&self) {
+        let mut closed = self.shared.closed_signal.subscribe();
+        let _ = closed.wait_for(|c| *c).await;
+    }
+
+    /// Whether the link to central is closed.
+    pub fn is_closed(&self) -> bool {
+        self.shared.closed.load(Ordering::Relaxed)
+    }
+
+    /// Central is gone: what was in flight went with it. Waiting queries and task watchers fail
+    /// with [`ModuleError::CentralLost`], running handlers stop, new sends are refused until
+    /// the module has rejoined.
+    pub(crate) fn go_offline(&self) {
+        self.shared.online.store(false, Ordering::Relaxed);
+        super::receive::fail_in_flight(&self.shared, || ModuleError::CentralLost);
+    }
+
+    /// Registered again with a new central.
+    pub(crate) fn go_online(&self) {
+        self.shared.online.store(true, Ordering::Relaxed);
+        self.shared.online_signal.send_replace(true);
+    }
+
+    /// The link number of a new central's welcome.
+    pub(crate) fn set_link(&self, link: u32) {
+        self.shared.link_no.store(link, Ordering::Relaxed);
+    }
+
+    /// Whether the module is registered with a live central. False while central is gone and
+    /// until the module has rejoined it (zenoh only; see [`crate::rejoin`]).
+    pub fn is_online(&self) -> bool {
+        self.shared.online.load(Ordering::Relaxed)
+    }
+
+    /// Waits until the module is registered with a live central (at once when it is), or for
+    /// at most `timeout`; returns whether it is.
+    pub async fn wait_online(&self, timeout: Duration) -> bool {
+        let mut online = self.shared.online_signal.subscribe();
+        let wait = online.wait_for(|_| self.is_online());
+        matches!(tokio::time::timeout(timeout, wait).await, Ok(Ok(_)))
+    }
+}
