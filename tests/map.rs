@@ -11,7 +11,7 @@ use std::sync::OnceLock;
 use common::*;
 use tca::walk::{SystemSetup, TerrainChoice};
 use tca_central::StartOptions;
-use tca_messages::walking::{MapCell, MapGrid, MapKind};
+use tca_single_leg_messages::{MapCell, MapGrid, MapKind};
 use tca_module::Module;
 
 fn tca(args: &[&str]) -> Output {

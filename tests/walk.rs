@@ -5,7 +5,7 @@ mod common;
 
 use common::within;
 use tca::walk::{ComputeModel, TerrainChoice, WalkOptions, WalkReport};
-use tca_messages::walking::WalkMode;
+use tca_single_leg_messages::WalkMode;
 use tokio::sync::mpsc;
 
 fn options(terrain: TerrainChoice, seed: u64) -> WalkOptions {

@@ -21,7 +21,7 @@
 //! secret_sha3 = "…64 hex digits…"
 //! modules = ["gait"]            # module names it may connect as (globs); default [name]
 //! register = ["planStep"]       # message names it may register (globs)
-//! send = ["ltm*", "legMove"]    # message names it may send (globs)
+//! send = ["ltm*", "moveArm"]    # message names it may send (globs)
 //! ```
 //!
 //! Globs: `*` matches any run of characters (also none), `?` exactly one. Control messages:
@@ -418,7 +418,7 @@ mod tests {
     fn policy() -> Policy {
         let text = format!(
             "[[identity]]\nname = \"gait\"\nsecret_sha3 = \"{}\"\nregister = [\"planStep\"]\n\
-             send = [\"ltm*\", \"legMove\", \"tca.kill\"]\n\
+             send = [\"ltm*\", \"moveArm\", \"tca.kill\"]\n\
              [[identity]]\nname = \"tools\"\nsecret_sha3 = \"{}\"\nmodules = [\"ping-*\"]\n",
             hash_secret("gait", "s3cret"),
             hash_secret("tools", "t00ls")
@@ -431,8 +431,8 @@ mod tests {
         assert!(glob_match("map*", "map"));
         assert!(glob_match("map*", "mapRegion"));
         assert!(!glob_match("map*", "amap"));
-        assert!(glob_match("*Move", "legMove"));
-        assert!(glob_match("l?gMove", "legMove"));
+        assert!(glob_match("*Move", "moveArm"));
+        assert!(glob_match("l?gMove", "moveArm"));
         assert!(glob_match("*", ""));
         assert!(glob_match("a*b*c", "axxbyyc"));
         assert!(!glob_match("a*b*c", "axxbyy"));
@@ -449,14 +449,14 @@ mod tests {
             .unwrap();
         assert_eq!(g.identity, "gait");
         assert!(g.may_send("ltmFootfall").is_ok());
-        assert!(g.may_send("legMove").is_ok());
+        assert!(g.may_send("moveArm").is_ok());
         assert!(g.may_send("tca.registry").is_ok());
         assert!(g.may_send("tca.kill").is_ok());
-        let err = g.may_send("bodyMove").unwrap_err();
+        let err = g.may_send("moveBase").unwrap_err();
         assert!(err.contains("identity \"gait\" send"), "{err}");
         assert!(g.may_send("tca.constrain").is_err());
         assert!(g.may_register("planStep").is_ok());
-        let err = g.may_register("legMove").unwrap_err();
+        let err = g.may_register("moveArm").unwrap_err();
         assert!(err.contains("register = [\"planStep\"]"), "{err}");
     }
 

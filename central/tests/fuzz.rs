@@ -25,7 +25,7 @@ use tca_logs::{
     Direction, FrameRecord, LinkEvent, LinkRecord, LogFile, LogRecord, LogWriter, ProblemRecord,
     RecordKind, RegisteredRecord, ShowFilter,
 };
-use tca_messages::control::{
+use tca_messages::control::{ControlKind, ControlRequest, 
     AuthHello, Constrain, Credentials, Hello, Kill, Monitor, MonitorAction, Register,
     RegisterOutcome, Registration, Registry, TaskEnded, TreeView, Welcome, names,
 };
@@ -351,7 +351,9 @@ fn target_payloads(bytes: &[u8]) {
     let _ = decode_data::<TreeView>(bytes);
     let _ = decode_data::<RouteError>(bytes);
     let _ = decode_data::<Failure>(bytes);
-    let _ = decode_data::<tca_messages::walking::LegMove>(bytes);
+    for kind in ControlKind::ALL {
+        let _ = ControlRequest::decode(kind.name(), bytes);
+    }
     if let Ok(reg) = decode_data::<Register>(bytes) {
         for r in &reg.entries {
             target_format(&r.format, bytes);

@@ -14,12 +14,14 @@
 //! **What is not compared**, by rule rather than by accident:
 //!
 //! - the envelope header: message ids, task-node ids, link numbers and timestamps. Ids name
-//!   messages and nodes and depend on the order of connection; stamps carry the planners'
-//!   computing time, which the walking modules charge to simulated time from the wall clock;
-//! - the data fields listed in [`WALL_CLOCK_FIELDS`] (measurements of the wall clock);
-//! - the data fields listed in [`MESSAGE_ID_FIELDS`] are message ids: they are compared through
-//!   the pairing (the recorded id must name the message paired with the one the live id
-//!   names), not as numbers.
+//!   messages and nodes and depend on the order of connection; stamps carry computing time,
+//!   which modules on simulated time may charge from the wall clock;
+//! - the data fields the [`Rules`] name as `ignored` (measurements of the wall clock, say);
+//! - the data fields the [`Rules`] name as `message_ids` are message ids: they are compared
+//!   through the pairing (the recorded id must name the message paired with the one the live
+//!   id names), not as numbers.
+//!
+//! The rules belong to the vocabulary being compared: whoever knows the messages gives them.
 //!
 //! Floats are compared exactly (NaN equals NaN): the planners are deterministic given identical
 //! inputs, so any change is a divergence.
@@ -41,28 +43,11 @@ pub struct FieldRule {
     pub message: &'static str,
     /// Which data: the message's own ([`Class::Query`] etc.) or its reply ([`Class::Reply`]).
     pub class: Class,
-    /// Field path, as printed in divergences (`footfall.x_m`).
+    /// Field path, as printed in divergences (`target.x_m`).
     pub path: &'static str,
     /// Why.
     pub why: &'static str,
 }
-
-/// Data fields that measure the wall clock: never compared.
-pub const WALL_CLOCK_FIELDS: &[FieldRule] = &[FieldRule {
-    message: "controllerStatus",
-    class: Class::Reply,
-    path: "clock_s",
-    why: "the controller's clock advances with the wall clock whenever the simulator runs at \
-          a finite speed factor",
-}];
-
-/// Data fields that hold message ids: compared through the pairing of messages.
-pub const MESSAGE_ID_FIELDS: &[FieldRule] = &[FieldRule {
-    message: "planStep",
-    class: Class::Goal,
-    path: "after_body_move",
-    why: "names the previous step's bodyMove message (concurrent walking)",
-}];
 
 /// Which stream a message belongs to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize)]
@@ -294,22 +279,13 @@ impl Comparison {
     }
 }
 
-/// Which field rules apply.
-#[derive(Clone, Debug)]
+/// Which field rules apply. The default has none: every data field is compared as a value.
+#[derive(Clone, Debug, Default)]
 pub struct Rules {
     /// Fields never compared.
     pub ignored: Vec<FieldRule>,
     /// Fields holding message ids.
     pub message_ids: Vec<FieldRule>,
-}
-
-impl Default for Rules {
-    fn default() -> Self {
-        Rules {
-            ignored: WALL_CLOCK_FIELDS.to_vec(),
-            message_ids: MESSAGE_ID_FIELDS.to_vec(),
-        }
-    }
 }
 
 /// One side of a comparison: a log and its window.
@@ -659,15 +635,15 @@ mod tests {
     }
 
     #[derive(Serialize, Deserialize, Clone, Copy)]
-    struct Recover {
-        footfall: Point,
-        body_y_m: f64,
+    struct Place {
+        target: Point,
+        base_m: f64,
     }
 
     #[derive(Serialize, Deserialize, Clone, Copy)]
     struct Step {
         step: u32,
-        after_body_move: Option<MessageId>,
+        after_move: Option<MessageId>,
     }
 
     fn envelope(id: MessageId, class: Class, name: &str, sender: &str, data: Vec<u8>) -> Envelope {
@@ -686,9 +662,9 @@ mod tests {
         }
     }
 
-    /// A log of `gait` sending `recoverLeg` goals with these footfalls, then `planStep`s
+    /// A log of `planner` sending `placeTool` goals with these targets, then `planMove`s
     /// naming the previous message, on link `link`.
-    fn log(link: u32, footfalls: &[(f64, f64)], steps: u32, answer_fails: bool) -> LogFile {
+    fn log(link: u32, targets: &[(f64, f64)], steps: u32, answer_fails: bool) -> LogFile {
         let mut records = Vec::new();
         let mut push = |env: Envelope| {
             records.push(LogRecord {
@@ -709,39 +685,39 @@ mod tests {
             MessageId::new(link, seq)
         };
         let walk = next();
-        push(envelope(walk, Class::Goal, "walk", "walker", vec![]));
+        push(envelope(walk, Class::Goal, "job", "user", vec![]));
         let mut previous = None;
-        for &(x, y) in footfalls {
-            let data = postcard::to_allocvec(&Recover {
-                footfall: Point { x_m: x, y_m: y },
-                body_y_m: 2.0,
+        for &(x, y) in targets {
+            let data = postcard::to_allocvec(&Place {
+                target: Point { x_m: x, y_m: y },
+                base_m: 2.0,
             })
             .unwrap();
             let id = next();
-            push(envelope(id, Class::Goal, "recoverLeg", "gait", data));
+            push(envelope(id, Class::Goal, "placeTool", "planner", data));
             previous = Some(id);
         }
         for step in 0..steps {
             let data = postcard::to_allocvec(&Step {
                 step,
-                after_body_move: previous,
+                after_move: previous,
             })
             .unwrap();
-            push(envelope(next(), Class::Goal, "planStep", "gait", data));
+            push(envelope(next(), Class::Goal, "planMove", "planner", data));
         }
         let (class, data) = if answer_fails {
             let f = tca_messages::Failure {
-                reason: "no footfall".into(),
+                reason: "no target".into(),
             };
             (Class::Failure, postcard::to_allocvec(&f).unwrap())
         } else {
             (Class::Success, postcard::to_allocvec(&()).unwrap())
         };
-        let mut answer = envelope(next(), class, "walk", "gait", data);
+        let mut answer = envelope(next(), class, "job", "planner", data);
         answer.correlation = Some(walk);
         push(answer);
         // Another module's message, not compared.
-        push(envelope(next(), Class::Inform, "note", "ism", vec![7]));
+        push(envelope(next(), Class::Inform, "note", "camera", vec![7]));
         let mut formats = HashMap::new();
         let known = |format: DataFormat| KnownFormat {
             class: Class::Goal,
@@ -749,11 +725,11 @@ mod tests {
             reply: None,
         };
         formats.insert(
-            MessageName::new("recoverLeg").unwrap(),
-            known(DataFormat::of::<Recover>().unwrap()),
+            MessageName::new("placeTool").unwrap(),
+            known(DataFormat::of::<Place>().unwrap()),
         );
         formats.insert(
-            MessageName::new("planStep").unwrap(),
+            MessageName::new("planMove").unwrap(),
             known(DataFormat::of::<Step>().unwrap()),
         );
         LogFile {
@@ -761,6 +737,19 @@ mod tests {
             records,
             formats,
             truncated: None,
+        }
+    }
+
+    /// The test vocabulary's rule: `planMove.after_move` names a message.
+    fn rules() -> Rules {
+        Rules {
+            ignored: Vec::new(),
+            message_ids: vec![FieldRule {
+                message: "planMove",
+                class: Class::Goal,
+                path: "after_move",
+                why: "names the previous move",
+            }],
         }
     }
 
@@ -775,8 +764,8 @@ mod tests {
                 log: b,
                 window: &wb,
             },
-            &["gait".to_owned()],
-            &Rules::default(),
+            &["planner".to_owned()],
+            &rules(),
         )
     }
 
@@ -786,7 +775,7 @@ mod tests {
         let b = log(7, &[(1.0, 2.0), (1.5, 2.5)], 2, false);
         let c = run(&a, &b);
         assert!(c.all_match(), "{:?}", c.divergences);
-        // two recoverLeg, two planStep, one walk answer; ism's inform is not compared
+        // two placeTool, two planMove, one job answer; camera's inform is not compared
         assert_eq!(c.compared, 5);
     }
 
@@ -798,7 +787,7 @@ mod tests {
         assert_eq!(c.divergences.len(), 1);
         assert_eq!(
             c.divergences[0].to_string(),
-            "gait -> recoverLeg #2, field footfall.x_m: recorded 1.55, live 1.65"
+            "planner -> placeTool #2, field target.x_m: recorded 1.55, live 1.65"
         );
     }
 
@@ -811,8 +800,8 @@ mod tests {
         assert_eq!(
             lines,
             [
-                "gait -> planStep #1: sent in the replay, but not in the record",
-                "gait -> recoverLeg #2: recorded, but never sent in the replay",
+                "planner -> planMove #1: sent in the replay, but not in the record",
+                "planner -> placeTool #2: recorded, but never sent in the replay",
             ]
         );
     }
@@ -825,10 +814,10 @@ mod tests {
         assert_eq!(c.divergences.len(), 1, "{:?}", c.divergences);
         let line = c.divergences[0].to_string();
         assert!(
-            line.starts_with("gait -> walk answer to walker #1: recorded success, live failure"),
+            line.starts_with("planner -> job answer to user #1: recorded success, live failure"),
             "{line}"
         );
-        assert!(line.contains("no footfall"), "{line}");
+        assert!(line.contains("no target"), "{line}");
     }
 
     #[test]
@@ -838,8 +827,7 @@ mod tests {
         let b = log(9, &[(1.0, 2.0)], 1, false);
         assert!(run(&a, &b).all_match());
         // The same number but naming another message: a divergence.
-        let mut rules = Rules::default();
-        rules.message_ids.clear();
+        let rules = Rules::default();
         let (wa, wb) = (0..a.records.len(), 0..b.records.len());
         let c = compare(
             Side {
@@ -850,14 +838,14 @@ mod tests {
                 log: &b,
                 window: &wb,
             },
-            &["gait".to_owned()],
+            &["planner".to_owned()],
             &rules,
         );
         assert_eq!(c.divergences.len(), 1);
         assert!(
             c.divergences[0]
                 .to_string()
-                .contains("field after_body_move"),
+                .contains("field after_move"),
             "{:?}",
             c.divergences
         );
@@ -867,7 +855,7 @@ mod tests {
     fn windows_limit_what_is_compared() {
         let a = log(3, &[(1.0, 2.0), (1.5, 2.5)], 0, false);
         let b = log(3, &[(1.0, 2.0), (9.0, 2.5)], 0, false);
-        // The walk goal and the first recoverLeg.
+        // The walk goal and the first placeTool.
         let (wa, wb) = (0..2, 0..2);
         let c = compare(
             Side {
@@ -878,8 +866,8 @@ mod tests {
                 log: &b,
                 window: &wb,
             },
-            &["gait".to_owned()],
-            &Rules::default(),
+            &["planner".to_owned()],
+            &rules(),
         );
         assert!(c.all_match());
         assert_eq!(c.compared, 1);

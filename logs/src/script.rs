@@ -433,9 +433,9 @@ mod tests {
 
     const S: u64 = 1_000_000_000;
 
-    /// The controller: a query answered at once, then a legMove that spends 3 s, raises
+    /// The controller: a query answered at once, then a moveArm that spends 3 s, raises
     /// moveFailed in its context and fails; the ISM asks it nothing. Then a goal delivered
-    /// while the controller is still busy starts when the legMove ended.
+    /// while the controller is still busy starts when the moveArm ended.
     fn controller_log() -> LogFile {
         use Direction::{In, Out};
         let mut b = Builder {
@@ -447,7 +447,7 @@ mod tests {
             kind: RecordKind::Registered(RegisteredRecord {
                 module: ModuleName::new("controller").unwrap(),
                 registration: Registration {
-                    name: MessageName::new("legMove").unwrap(),
+                    name: MessageName::new("moveArm").unwrap(),
                     class: Class::Command,
                     format: DataFormat::of::<u32>().unwrap(),
                     reply: None,
@@ -483,14 +483,14 @@ mod tests {
             Some((6, 5)),
             encode_data(&2.5f64).unwrap(),
         );
-        // legMove from lrp at t = 11 s as node 7.
+        // moveArm from lrp at t = 11 s as node 7.
         b.frame(
             Out,
             "controller",
             "lrp",
             (5, 9),
             Class::Command,
-            "legMove",
+            "moveArm",
             11 * S,
             Some(7),
             Some(6),
@@ -548,21 +548,21 @@ mod tests {
             "controller",
             (1, 5),
             Class::Failure,
-            "legMove",
+            "moveArm",
             14 * S,
             Some(7),
             Some(7),
             Some((5, 9)),
             failure,
         );
-        // A bodyMove sent at 13 s (before the legMove ended), answered at 20 s.
+        // A moveBase sent at 13 s (before the moveArm ended), answered at 20 s.
         b.frame(
             Out,
             "controller",
             "gait",
             (6, 8),
             Class::Command,
-            "bodyMove",
+            "moveBase",
             13 * S,
             Some(8),
             Some(2),
@@ -575,7 +575,7 @@ mod tests {
             "controller",
             (1, 6),
             Class::Success,
-            "bodyMove",
+            "moveBase",
             20 * S,
             Some(8),
             Some(8),
@@ -649,7 +649,7 @@ mod tests {
             h[0].answer.as_ref().unwrap().outcome,
             AnswerOutcome::Reply(_)
         ));
-        // legMove: the query and the exception, then the failure.
+        // moveArm: the query and the exception, then the failure.
         let names: Vec<&str> = h[1]
             .actions
             .iter()
@@ -672,7 +672,7 @@ mod tests {
             answer.outcome,
             AnswerOutcome::Failure("struck the terrain".into())
         );
-        // bodyMove, sent at 13 s, starts when the legMove ended (14 s): 6 s of its own.
+        // moveBase, sent at 13 s, starts when the moveArm ended (14 s): 6 s of its own.
         assert_eq!(h[2].answer.as_ref().unwrap().spend, Duration::from_secs(6));
         assert_eq!(
             h[2].answer.as_ref().unwrap().outcome,

@@ -10,7 +10,7 @@ fn envelope(seq: u32, y: f64) -> Envelope {
     Envelope {
         id: MessageId::new(2, seq),
         class: Class::Command,
-        name: MessageName::new("bodyMove").unwrap(),
+        name: MessageName::new("moveBase").unwrap(),
         sender: ModuleName::new("gait").unwrap(),
         context: None,
         node: Some(NodeId(u64::from(seq))),
@@ -28,7 +28,7 @@ fn records(n: u32) -> Vec<LogRecord> {
         kind: RecordKind::Registered(RegisteredRecord {
             module: ModuleName::new("controller").unwrap(),
             registration: Registration {
-                name: MessageName::new("bodyMove").unwrap(),
+                name: MessageName::new("moveBase").unwrap(),
                 class: Class::Command,
                 format: DataFormat::of::<f64>().unwrap(),
                 reply: None,
@@ -43,7 +43,7 @@ fn records(n: u32) -> Vec<LogRecord> {
                 direction: Direction::Out,
                 link: 1,
                 peer: Some(ModuleName::new("controller").unwrap()),
-                name: MessageName::new("bodyMove").unwrap(),
+                name: MessageName::new("moveBase").unwrap(),
                 class: Class::Command,
                 frame: Bytes::from(encode(&envelope(seq, f64::from(seq) / 2.0)).unwrap()),
             }),
@@ -69,7 +69,7 @@ fn a_finished_log_reads_back_exactly() {
     assert!(
         lines
             .iter()
-            .any(|l| l.contains("command   gait -> controller  bodyMove  n3  m2.3  1.5")),
+            .any(|l| l.contains("command   gait -> controller  moveBase  n3  m2.3  1.5")),
         "{lines:#?}"
     );
 }
@@ -148,7 +148,7 @@ fn the_json_export_opens_as_plain_mcap_with_decoded_data() {
         let m = m.unwrap();
         assert_eq!(m.channel.message_encoding, "json");
         let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
-        if m.channel.topic == "bodyMove" {
+        if m.channel.topic == "moveBase" {
             assert_eq!(v["class"], "command");
             assert_eq!(v["from"], "gait");
             assert_eq!(v["to"], "controller");

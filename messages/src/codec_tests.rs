@@ -8,7 +8,7 @@ fn sample() -> Envelope {
     Envelope {
         id: MessageId::new(2, 5),
         class: Class::Command,
-        name: MessageName::new("bodyMove").unwrap(),
+        name: MessageName::new("moveBase").unwrap(),
         sender: ModuleName::new("gait").unwrap(),
         context: Some(NodeId(3)),
         node: None,
@@ -29,7 +29,7 @@ fn golden_bytes_of_a_frame() {
         vec![0x85, 0x80, 0x80, 0x80, 0x20], // id = 2 << 32 | 5, varint
         vec![2],                            // class Command
         vec![8],
-        b"bodyMove".to_vec(), // name
+        b"moveBase".to_vec(), // name
         vec![4],
         b"gait".to_vec(),                      // sender
         vec![1, 3],                            // context Some(n3)
@@ -155,35 +155,4 @@ proptest! {
         let bytes = encode_data(&hello).unwrap();
         prop_assert_eq!(decode_data::<control::Hello>(&bytes).unwrap(), hello);
     }
-}
-
-#[test]
-fn every_walking_message_has_a_format() {
-    use crate::walking::*;
-    fn check<M: Message>() {
-        let f = M::format().unwrap_or_else(|e| panic!("{}: {e}", M::NAME));
-        f.validate().unwrap();
-        if M::CLASS == Class::Query {
-            assert!(M::reply_format().unwrap().is_some(), "{}", M::NAME);
-        }
-    }
-    check::<BodyMove>();
-    check::<LegMove>();
-    check::<SetTransForce>();
-    check::<BodyPosition>();
-    check::<JointLegPosition>();
-    check::<CartLegPosition>();
-    check::<GlobalLegPosition>();
-    check::<ReadForce>();
-    check::<ControllerStatus>();
-    check::<MoveFailed>();
-    check::<HardwareFault>();
-    check::<AcquireImage>();
-    check::<MapRegion>();
-    check::<RenderMap>();
-    check::<Walk>();
-    check::<PlanStep>();
-    check::<RecoverLeg>();
-    check::<LegReachability>();
-    check::<StepPlanned>();
 }

@@ -110,7 +110,7 @@ macro_rules! name_type {
 }
 
 name_type!(
-    /// The name of a message, e.g. `bodyMove`. Central routes by it.
+    /// The name of a message, e.g. `moveBase`. Central routes by it.
     ///
     /// Names under `tca.` are reserved for central's own control traffic.
     MessageName,
@@ -130,7 +130,7 @@ impl MessageName {
     }
 
     /// A spelling-insensitive key: lower case with `_`, `-` and `.` removed, so that
-    /// `body_move`, `body-move` and `bodyMove` share a key (§7.1 met exactly this mix-up).
+    /// `move_base`, `move-base` and `moveBase` share a key (§7.1 met exactly this mix-up).
     pub fn fold(&self) -> String {
         fold_name(&self.0)
     }
@@ -188,7 +188,7 @@ mod tests {
 
     #[test]
     fn names_are_validated() {
-        assert!(MessageName::new("bodyMove").is_ok());
+        assert!(MessageName::new("moveBase").is_ok());
         assert!(MessageName::new("tca.register").unwrap().is_control());
         assert!(matches!(MessageName::new(""), Err(NameError::Empty { .. })));
         let err = MessageName::new("body move").unwrap_err();
@@ -198,8 +198,8 @@ mod tests {
 
     #[test]
     fn folding_catches_spelling_variants() {
-        let a = MessageName::new("body_move").unwrap();
-        let b = MessageName::new("bodyMove").unwrap();
+        let a = MessageName::new("move_base").unwrap();
+        let b = MessageName::new("moveBase").unwrap();
         assert_eq!(a.fold(), b.fold());
     }
 

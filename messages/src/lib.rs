@@ -21,7 +21,6 @@
 //! - [`route_error`]: [`RouteError`], what central answers when it cannot route a message.
 //! - [`sim_time`]: [`HandlingClock`], when a module's handlers start in simulated time.
 //! - [`codec`]: the single encode/decode entry point (postcard), strict and size-limited.
-//! - [`walking`]: the single-leg walking system's message vocabulary, with units.
 //! - [`error`]: error types.
 
 pub mod class;
@@ -36,7 +35,6 @@ pub mod route_error;
 pub mod sim_time;
 mod trace;
 pub mod value;
-pub mod walking;
 
 pub use class::Class;
 pub use codec::{

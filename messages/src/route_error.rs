@@ -97,7 +97,7 @@ pub enum RouteError {
         action: String,
         /// The message name.
         name: String,
-        /// The policy rule that decided, e.g. `identity "gait": send = ["ltm*", "legMove"]`.
+        /// The policy rule that decided, e.g. `identity "gait": send = ["ltm*", "moveArm"]`.
         rule: String,
     },
     /// The sending module is over one of its resource limits in central; the message was

@@ -270,9 +270,9 @@ async fn one_walk(
         goal_y_m: None,
         backward: false,
         mode: if options.concurrent {
-            tca_messages::walking::WalkMode::Concurrent
+            tca_single_leg_messages::WalkMode::Concurrent
         } else {
-            tca_messages::walking::WalkMode::Sequential
+            tca_single_leg_messages::WalkMode::Sequential
         },
         seed: options.seed,
         out: None,

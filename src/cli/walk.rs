@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use clap::Args;
 use tca::walk::{ComputeModel, Progress, TerrainChoice, WalkOptions};
-use tca_messages::walking::WalkMode;
+use tca_single_leg_messages::WalkMode;
 use tokio::sync::mpsc;
 
 #[derive(Debug, Args)]

@@ -9,7 +9,7 @@ use std::path::Path;
 use anyhow::{Context as _, bail};
 use tca_logs::{Direction, LogFile, RecordKind, TimeBase};
 use tca_ltm::{LtmConfig, TerrainMap};
-use tca_messages::walking::{MapRegion, Overlay, RangeImage, RecoverLeg, StepPlanned, WorldPoint};
+use tca_single_leg_messages::{MapRegion, Overlay, RangeImage, RecoverLeg, StepPlanned, WorldPoint};
 use tca_messages::{Class, decode_data};
 
 use super::picture::{MapPicture, draw};

@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use anyhow::{Context as _, bail};
 use tca_messages::control::TaskOutcome;
-use tca_messages::walking::{BodyPosition, MapCell, MapGrid, MapKind, MapRegion, RenderMap};
+use tca_single_leg_messages::{BodyPosition, MapCell, MapGrid, MapKind, MapRegion, RenderMap};
 use tca_module::{Connector, Module};
 use tca_robot::LegParams;
 use tca_robot::course::{PIT_SIZE_X_M, PIT_SIZE_Y_M};

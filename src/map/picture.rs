@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Context as _;
 use serde::Serialize;
-use tca_messages::walking::{MapCell, MapGrid, Overlay};
+use tca_single_leg_messages::{MapCell, MapGrid, Overlay};
 use tca_pdm::RenderOptions;
 
 use super::request::kind_name;
@@ -150,7 +150,7 @@ pub fn png_size(path: &Path) -> anyhow::Result<(u32, u32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use tca_messages::walking::MapKind;
+    use tca_single_leg_messages::MapKind;
 
     #[test]
     fn a_drawn_grid_is_described_by_its_cells_and_extent() {

@@ -3,7 +3,7 @@
 
 use anyhow::{Context as _, bail};
 use tca_ltm::{LtmConfig, Region};
-use tca_messages::walking::{MapKind, PlanePoint};
+use tca_single_leg_messages::{MapKind, PlanePoint};
 use tca_pdm::render::MAX_CELLS_PER_SIDE;
 
 /// The default cell size, metres.

@@ -54,7 +54,7 @@ use std::time::{Duration, Instant};
 use anyhow::{Context as _, bail};
 use serde::Serialize;
 use tca_central::StartOptions;
-use tca_logs::compare::{Rules, Side};
+use tca_logs::compare::{FieldRule, Rules, Side};
 use tca_logs::{LogFile, RootTask};
 use tca_messages::Class;
 use tca_messages::control::TaskOutcome;
@@ -74,6 +74,25 @@ pub const GOAL_TIMEOUT_FACTOR: u32 = 20;
 
 /// How many divergences a report lists.
 pub const LISTED_DIVERGENCES: usize = 20;
+
+/// The data fields of the walking vocabulary that a replay treats specially.
+pub fn comparison_rules() -> Rules {
+    Rules {
+        ignored: vec![FieldRule {
+            message: "controllerStatus",
+            class: Class::Reply,
+            path: "clock_s",
+            why: "the controller's clock advances with the wall clock whenever the simulator \
+                  runs at a finite speed factor",
+        }],
+        message_ids: vec![FieldRule {
+            message: "planStep",
+            class: Class::Goal,
+            path: "after_body_move",
+            why: "names the previous step's bodyMove message (concurrent walking)",
+        }],
+    }
+}
 
 /// What to replay.
 #[derive(Clone, Debug)]
@@ -528,7 +547,7 @@ pub async fn replay(options: &ReplayOptions) -> anyhow::Result<ReplayReport> {
             window: &live_window,
         },
         &live,
-        &Rules::default(),
+        &comparison_rules(),
     );
     let goals_match =
         goals.len() == recorded.roots.len() && goals.iter().all(|g| g.recorded == g.live);

@@ -16,7 +16,7 @@ use anyhow::Context as _;
 use serde::Serialize;
 use tca_central::StartOptions;
 use tca_messages::control::TaskOutcome;
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     BodyPosition, ControllerStatus, StepPlanned, Walk, WalkMode, WorldPoint,
 };
 use tca_module::{Connector, Module};

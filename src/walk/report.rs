@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::Context as _;
 use tca_logs::{Direction, LogFile, RecordKind, TimeBase};
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     BodyMove, LegMove, MapKind, MapRegion, Overlay, PlanePoint, RenderMap, WorldPoint,
 };
 use tca_messages::{Class, decode_data};

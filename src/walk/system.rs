@@ -135,7 +135,7 @@ pub async fn connect_module(
             // (§1: the scanner "did not have sufficient resolution and accuracy").
             let config = LtmConfig {
                 simulated_time: true,
-                sensor: tca_messages::walking::SensorKind::Perceptron,
+                sensor: tca_single_leg_messages::SensorKind::Perceptron,
                 store_dir: setup.state_dir.as_ref().map(|d| d.join("ltm-tiles")),
                 ..LtmConfig::default()
             };

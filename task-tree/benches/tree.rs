@@ -29,7 +29,7 @@ const INSTANT: Durations = Durations {
     plan_gait: 0,
     lrp: 0,
     leg_move: 0,
-    body_move: 0,
+    base_move: 0,
 };
 
 /// Walks `steps` steps; returns nodes added.

@@ -379,7 +379,7 @@ mod tests {
         let mut b = Bench::new();
         let root = b.goal(None, "walk");
         let n2 = b.goal(Some(root), "planGait");
-        let n3 = b.goal(Some(n2), "legMove");
+        let n3 = b.goal(Some(n2), "moveArm");
         let err = b
             .tree
             .add_constraint(

@@ -114,10 +114,10 @@ mod tests {
         let mut b = Bench::new();
         let root = b.goal(None, "walk");
         b.start(root);
-        let leg = b.command(root, "legMove", &[]);
+        let leg = b.command(root, "moveArm", &[]);
         let body = b.command(
             root,
-            "bodyMove",
+            "moveBase",
             &[NewConstraint::sequential_achievement_after(leg)],
         );
         let err = b.tree.start(body, b.now).expect_err("not ready");

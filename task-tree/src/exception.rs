@@ -282,16 +282,16 @@ mod tests {
         let step = b.goal(Some(root), "step");
         let other = b.goal(Some(root), "other");
         b.start(step);
-        let leg = b.command(step, "legMove", &[]);
+        let leg = b.command(step, "moveArm", &[]);
         let body = b.command(
             step,
-            "bodyMove",
+            "moveBase",
             &[NewConstraint::sequential_achievement_after(leg)],
         );
         b.succeed(step);
         b.start(leg);
         let events = b.fail(leg, "foot slipped");
-        let reason = "descendant n4 (legMove) failed: foot slipped".to_string();
+        let reason = "descendant n4 (moveArm) failed: foot slipped".to_string();
         assert_eq!(
             events,
             vec![
@@ -324,10 +324,10 @@ mod tests {
         let mut b = Bench::new();
         let root = b.goal(None, "walk");
         b.start(root);
-        let leg = b.command(root, "legMove", &[]);
+        let leg = b.command(root, "moveArm", &[]);
         let body = b.command(
             root,
-            "bodyMove",
+            "moveBase",
             &[NewConstraint::sequential_achievement_after(leg)],
         );
         b.succeed(root);
@@ -343,7 +343,7 @@ mod tests {
         );
         let view = b.tree.get(leg).expect("held");
         assert!(view.failure_held());
-        assert!(!b.tree.is_ready(body), "bodyMove still waits for legMove");
+        assert!(!b.tree.is_ready(body), "moveBase still waits for moveArm");
         let events = b.tree.retry(leg, b.now).expect("retry");
         assert!(events.is_empty(), "still suspended: {events:?}");
         let events = b.tree.resume(leg, b.now).expect("resume");
@@ -359,7 +359,7 @@ mod tests {
         let mut b = Bench::new();
         let root = b.goal(None, "walk");
         b.start(root);
-        let leg = b.command(root, "legMove", &[]);
+        let leg = b.command(root, "moveArm", &[]);
         b.start(leg);
         b.tree.suspend(root, b.now).expect("suspend");
         b.fail(leg, "slip");
@@ -368,7 +368,7 @@ mod tests {
         assert!(
             events.contains(&TreeEvent::Failed {
                 node: root,
-                reason: "descendant n2 (legMove) failed: slip".into()
+                reason: "descendant n2 (moveArm) failed: slip".into()
             }),
             "{events:?}"
         );
@@ -384,15 +384,15 @@ mod tests {
         b.start(walk);
         let step = b.goal(Some(walk), "step");
         b.start(step);
-        let leg_goal = b.goal(Some(step), "legMoveGoal");
+        let leg_goal = b.goal(Some(step), "moveArmGoal");
         let body = b.command(
             step,
-            "bodyMove",
+            "moveBase",
             &[NewConstraint::sequential_achievement_after(leg_goal)],
         );
         b.succeed(step);
         b.start(leg_goal);
-        let leg = b.command(leg_goal, "legMove", &[]);
+        let leg = b.command(leg_goal, "moveArm", &[]);
         b.succeed(leg_goal);
         b.start(leg);
         // The controller raises an exception: central suspends, reports the failure...
@@ -406,7 +406,7 @@ mod tests {
         let (recover, _) = b
             .tree
             .add_node(
-                NodeSpec::command("recoverLeg", "controller")
+                NodeSpec::command("planArm", "controller")
                     .under(step)
                     .with(NewConstraint::Before {
                         point: crate::Point::AchievementEnd,
@@ -434,10 +434,10 @@ mod tests {
         b.start(root);
         let step = b.goal(Some(root), "step");
         b.start(step);
-        let leg = b.command(step, "legMove", &[]);
+        let leg = b.command(step, "moveArm", &[]);
         let waiting = b.command(
             step,
-            "bodyMove",
+            "moveBase",
             &[NewConstraint::sequential_achievement_after(leg)],
         );
         let later = b.command(

@@ -177,14 +177,14 @@
 //! let (walk, events) = tree.add_node(NodeSpec::goal("walk", "gait-planner"), 0)?;
 //! assert_eq!(events, vec![TreeEvent::Ready(walk)]);
 //! tree.start(walk, 1)?;
-//! let (leg, _) = tree.add_node(NodeSpec::command("legMove", "controller").under(walk), 2)?;
+//! let (leg, _) = tree.add_node(NodeSpec::command("moveArm", "controller").under(walk), 2)?;
 //! let (body, events) = tree.add_node(
-//!     NodeSpec::command("bodyMove", "controller")
+//!     NodeSpec::command("moveBase", "controller")
 //!         .under(walk)
 //!         .with(NewConstraint::sequential_achievement_after(leg)),
 //!     2,
 //! )?;
-//! assert!(events.is_empty()); // bodyMove waits for legMove to be achieved
+//! assert!(events.is_empty()); // moveBase waits for moveArm to be achieved
 //! tree.finish(walk, Outcome::Success, 3)?;
 //! tree.start(leg, 3)?;
 //! let events = tree.finish(leg, Outcome::Success, 9)?;

@@ -12,7 +12,7 @@ impl TaskTree {
     ///
     /// ```text
     /// n1 goal walk -> gait-planner: achieving
-    ///   n4 command bodyMove -> controller: waiting; waits for end(achieve n3) <= start(achieve n4)
+    ///   n4 command moveBase -> controller: waiting; waits for end(achieve n3) <= start(achieve n4)
     /// ```
     pub fn render_text(&self) -> String {
         let mut out = String::new();
@@ -88,10 +88,10 @@ mod tests {
         let walk = b.goal(None, "walk");
         b.start(walk);
         let step = b.goal(Some(walk), "planGait");
-        let leg = b.command(step, "legMove", &[]);
+        let leg = b.command(step, "moveArm", &[]);
         b.command(
             step,
-            "bodyMove",
+            "moveBase",
             &[NewConstraint::sequential_achievement_after(leg)],
         );
         b.tree.suspend(step, b.now).expect("suspend");
@@ -99,8 +99,8 @@ mod tests {
             b.tree.render_text(),
             "n1 goal walk -> planner: handling\n\
              \x20 n2 goal planGait -> planner: waiting, suspended\n\
-             \x20   n3 command legMove -> controller: waiting\n\
-             \x20   n4 command bodyMove -> controller: waiting; waits for end(achieve n3) <= start(achieve n4)\n"
+             \x20   n3 command moveArm -> controller: waiting\n\
+             \x20   n4 command moveBase -> controller: waiting; waits for end(achieve n3) <= start(achieve n4)\n"
         );
     }
 }

@@ -15,7 +15,7 @@ fn starts(mode: Mode, steps: u32) -> (Vec<(u64, Role)>, u64, WalkSim) {
 }
 
 #[test]
-fn sequential_walking_plans_each_step_after_the_previous_body_move() {
+fn sequential_walking_plans_each_step_after_the_previous_base_move() {
     use Role::*;
     let (starts, end, _) = starts(Mode::Sequential, 3);
     assert_eq!(
@@ -23,17 +23,17 @@ fn sequential_walking_plans_each_step_after_the_previous_body_move() {
         vec![
             (0, Walk),
             (1, PlanGait(1)),
-            (3, LegMoveGoal(1)),
-            (4, LegMove(1)),
-            (9, BodyMove(1)),
+            (3, MoveArmGoal(1)),
+            (4, MoveArm(1)),
+            (9, MoveBase(1)),
             (13, PlanGait(2)),
-            (15, LegMoveGoal(2)),
-            (16, LegMove(2)),
-            (21, BodyMove(2)),
+            (15, MoveArmGoal(2)),
+            (16, MoveArm(2)),
+            (21, MoveBase(2)),
             (25, PlanGait(3)),
-            (27, LegMoveGoal(3)),
-            (28, LegMove(3)),
-            (33, BodyMove(3)),
+            (27, MoveArmGoal(3)),
+            (28, MoveArm(3)),
+            (33, MoveBase(3)),
         ]
     );
     assert_eq!(end, 37);
@@ -50,16 +50,16 @@ fn concurrent_walking_plans_the_next_step_while_the_current_one_executes() {
             (0, Walk),
             (1, PlanGait(1)),
             (3, PlanGait(2)),
-            (3, LegMoveGoal(1)),
-            (4, LegMove(1)),
-            (5, LegMoveGoal(2)),
-            (9, BodyMove(1)),
+            (3, MoveArmGoal(1)),
+            (4, MoveArm(1)),
+            (5, MoveArmGoal(2)),
+            (9, MoveBase(1)),
             (13, PlanGait(3)),
-            (13, LegMove(2)),
-            (15, LegMoveGoal(3)),
-            (18, BodyMove(2)),
-            (22, LegMove(3)),
-            (27, BodyMove(3)),
+            (13, MoveArm(2)),
+            (15, MoveArmGoal(3)),
+            (18, MoveBase(2)),
+            (22, MoveArm(3)),
+            (27, MoveBase(3)),
         ]
     );
     assert_eq!(
@@ -69,16 +69,16 @@ fn concurrent_walking_plans_the_next_step_while_the_current_one_executes() {
 }
 
 #[test]
-fn commands_never_overlap_and_each_leg_move_precedes_its_body_move() {
+fn commands_never_overlap_and_each_leg_move_precedes_its_base_move() {
     for mode in [Mode::Sequential, Mode::Concurrent] {
         let (starts, _, _) = starts(mode, 20);
         let commands: Vec<Role> = starts
             .iter()
             .map(|(_, r)| *r)
-            .filter(|r| matches!(r, Role::LegMove(_) | Role::BodyMove(_)))
+            .filter(|r| matches!(r, Role::MoveArm(_) | Role::MoveBase(_)))
             .collect();
         let expected: Vec<Role> = (1..=20)
-            .flat_map(|k| [Role::LegMove(k), Role::BodyMove(k)])
+            .flat_map(|k| [Role::MoveArm(k), Role::MoveBase(k)])
             .collect();
         assert_eq!(commands, expected, "{mode:?}");
     }
@@ -102,7 +102,7 @@ fn replaying_the_walk_reproduces_ids_events_and_trees() {
         "{text}"
     );
     assert!(
-        text.contains("command legMove -> controller: handling"),
+        text.contains("command moveArm -> controller: handling"),
         "{text}"
     );
     assert!(!events.is_empty() && events.iter().any(|e| matches!(e, TreeEvent::Retired(_))));

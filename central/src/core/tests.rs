@@ -245,13 +245,13 @@ fn queries_are_routed_and_answered() {
 fn unknown_names_get_an_error_with_a_suggestion() {
     let mut h = Harness::new();
     h.connect(1, "ctl", 1);
-    h.register::<Target>(1, "ctl", "bodyMove", Class::Command, false);
-    let c = h.envelope(1, "ctl", Class::Command, "body_move", target(1.0));
+    h.register::<Target>(1, "ctl", "moveBase", Class::Command, false);
+    let c = h.envelope(1, "ctl", Class::Command, "move_base", target(1.0));
     let sent = h.send(1, &c);
     let err = error_of(&sent[0].1);
     assert!(matches!(err, RouteError::UnknownMessage { .. }));
     assert!(
-        err.to_string().contains("did you mean \"bodyMove\""),
+        err.to_string().contains("did you mean \"moveBase\""),
         "{err}"
     );
     assert_eq!(sent[0].1.correlation, Some(c.id));
@@ -262,8 +262,8 @@ fn a_differing_format_is_refused_naming_the_field() {
     let mut h = Harness::new();
     h.connect(1, "a", 1);
     h.connect(2, "b", 1);
-    h.register::<Target>(1, "a", "bodyMove", Class::Command, false);
-    let outcome = h.register::<TargetDeg>(2, "b", "bodyMove", Class::Command, true);
+    h.register::<Target>(1, "a", "moveBase", Class::Command, false);
+    let outcome = h.register::<TargetDeg>(2, "b", "moveBase", Class::Command, true);
     assert_eq!(outcome.refused.len(), 1);
     let reason = &outcome.refused[0].1;
     assert!(reason.contains("$.y_m"), "{reason}");
@@ -276,16 +276,16 @@ fn a_second_handler_needs_replace_and_then_takes_over() {
     h.connect(1, "sim", 1);
     h.connect(2, "real", 1);
     h.connect(3, "gait", 1);
-    h.register::<Target>(1, "sim", "bodyMove", Class::Command, false);
-    let refused = h.register::<Target>(2, "real", "bodyMove", Class::Command, false);
+    h.register::<Target>(1, "sim", "moveBase", Class::Command, false);
+    let refused = h.register::<Target>(2, "real", "moveBase", Class::Command, false);
     assert!(
         refused.refused[0]
             .1
             .contains("already handled by module sim")
     );
-    let ok = h.register::<Target>(2, "real", "bodyMove", Class::Command, true);
+    let ok = h.register::<Target>(2, "real", "moveBase", Class::Command, true);
     assert!(ok.refused.is_empty());
-    let c = h.envelope(3, "gait", Class::Command, "bodyMove", target(1.0));
+    let c = h.envelope(3, "gait", Class::Command, "moveBase", target(1.0));
     let sent = h.send(3, &c);
     assert_eq!(sent[0].0, 2, "the replacement handles it");
 }
@@ -295,9 +295,9 @@ fn commands_wait_for_capacity_and_run_in_order() {
     let mut h = Harness::new();
     h.connect(1, "ctl", 1);
     h.connect(2, "gait", 1);
-    h.register::<Target>(1, "ctl", "bodyMove", Class::Command, false);
-    let a = h.envelope(2, "gait", Class::Command, "bodyMove", target(1.0));
-    let b = h.envelope(2, "gait", Class::Command, "bodyMove", target(2.0));
+    h.register::<Target>(1, "ctl", "moveBase", Class::Command, false);
+    let a = h.envelope(2, "gait", Class::Command, "moveBase", target(1.0));
+    let b = h.envelope(2, "gait", Class::Command, "moveBase", target(2.0));
     let sent = h.send(2, &a);
     assert_eq!(sent.len(), 1);
     assert!(sent[0].1.node.is_some(), "delivered with its node");
@@ -378,13 +378,13 @@ fn a_running_command_is_redelivered_after_its_handler_restarts() {
     let mut h = Harness::new();
     h.connect(1, "ctl", 1);
     h.connect(2, "gait", 1);
-    h.register::<Target>(1, "ctl", "bodyMove", Class::Command, false);
-    let mut c = h.envelope(2, "gait", Class::Command, "bodyMove", target(3.0));
+    h.register::<Target>(1, "ctl", "moveBase", Class::Command, false);
+    let mut c = h.envelope(2, "gait", Class::Command, "moveBase", target(3.0));
     c.options.notify = true;
     assert_eq!(h.send(2, &c).len(), 1);
     h.step(Event::Closed(1));
     h.connect(3, "ctl", 1);
-    let sent = h.register_sent::<Target>(3, "ctl", "bodyMove", Class::Command);
+    let sent = h.register_sent::<Target>(3, "ctl", "moveBase", Class::Command);
     let again = sent
         .iter()
         .find(|(_, e)| e.id == c.id)
@@ -492,7 +492,7 @@ fn an_exception_handled_two_levels_up_patches_the_plan_and_the_tree_completes() 
     h.register::<Target>(2, "gait", "walk", Class::Goal, false);
     h.register::<Failed>(2, "gait", "moveFailed", Class::Exception, false);
     h.register::<Target>(3, "lrp", "step", Class::Goal, false);
-    h.register::<Target>(4, "ctl", "legMove", Class::Command, false);
+    h.register::<Target>(4, "ctl", "moveArm", Class::Command, false);
 
     // user -> walk (W); gait attaches its exception handler at W and sends step S.
     let (walk, sent) = task(&mut h, 1, "user", Class::Goal, "walk", None, true);
@@ -511,8 +511,8 @@ fn an_exception_handled_two_levels_up_patches_the_plan_and_the_tree_completes() 
     let (_step, sent) = task(&mut h, 2, "gait", Class::Goal, "step", Some(w), false);
     let s = sent[0].1.node.unwrap();
     h.done(2, "gait", &walk, true); // the walk handler is done planning
-    // lrp -> legMove (C) under S; the controller fails it with an exception.
-    let (leg, sent) = task(&mut h, 3, "lrp", Class::Command, "legMove", Some(s), false);
+    // lrp -> moveArm (C) under S; the controller fails it with an exception.
+    let (leg, sent) = task(&mut h, 3, "lrp", Class::Command, "moveArm", Some(s), false);
     let c = sent[0].1.node.unwrap();
     let mut exc = h.envelope(
         4,
@@ -558,7 +558,7 @@ fn an_exception_handled_two_levels_up_patches_the_plan_and_the_tree_completes() 
     ok.correlation = Some(exc.id);
     h.send(2, &ok);
     // The new step runs to the end and the walk is achieved.
-    let (leg2, _) = task(&mut h, 3, "lrp", Class::Command, "legMove", Some(s2), false);
+    let (leg2, _) = task(&mut h, 3, "lrp", Class::Command, "moveArm", Some(s2), false);
     h.done(3, "lrp", &step2, true);
     let sent = h.done(4, "ctl", &leg2, true);
     let ended = sent
@@ -576,8 +576,8 @@ fn an_unhandled_exception_fails_the_tree_and_its_originator_is_told() {
     let mut h = Harness::new();
     h.connect(1, "user", 1);
     h.connect(2, "ctl", 1);
-    h.register::<Target>(2, "ctl", "legMove", Class::Command, false);
-    let (_cmd, sent) = task(&mut h, 1, "user", Class::Command, "legMove", None, false);
+    h.register::<Target>(2, "ctl", "moveArm", Class::Command, false);
+    let (_cmd, sent) = task(&mut h, 1, "user", Class::Command, "moveArm", None, false);
     let c = sent[0].1.node.unwrap();
     let mut exc = h.envelope(
         2,
@@ -710,8 +710,8 @@ fn a_full_inbox_is_answered_with_an_error_naming_the_limit() {
 fn the_policy_refuses_strangers_and_sends_outside_the_rules_without_routing_them() {
     let text = format!(
         "[[identity]]\nname = \"gait\"\nsecret_sha3 = \"{}\"\nregister = []\n\
-         send = [\"bodyMove\", \"tca.monitor\"]\n\
-         [[identity]]\nname = \"ctl\"\nsecret_sha3 = \"{}\"\nregister = [\"bodyMove\", \"status\"]\n",
+         send = [\"moveBase\", \"tca.monitor\"]\n\
+         [[identity]]\nname = \"ctl\"\nsecret_sha3 = \"{}\"\nregister = [\"moveBase\", \"status\"]\n",
         crate::policy::hash_secret("gait", "g"),
         crate::policy::hash_secret("ctl", "c"),
     );
@@ -753,7 +753,7 @@ fn the_policy_refuses_strangers_and_sends_outside_the_rules_without_routing_them
     let sent = auth_hello(&mut h, 1, "ctl", "ctl", "c");
     assert_eq!(sent[0].1.class, Class::Control, "welcome");
     auth_hello(&mut h, 2, "gait", "gait", "g");
-    let outcome = h.register::<Target>(1, "ctl", "bodyMove", Class::Command, false);
+    let outcome = h.register::<Target>(1, "ctl", "moveBase", Class::Command, false);
     assert_eq!(outcome.accepted.len(), 1);
     let outcome = h.register::<Target>(1, "ctl", "walk", Class::Goal, false);
     assert!(
@@ -761,8 +761,8 @@ fn the_policy_refuses_strangers_and_sends_outside_the_rules_without_routing_them
         "{outcome:?}"
     );
     h.register::<Target>(1, "ctl", "status", Class::Query, false);
-    // gait may send bodyMove...
-    let ok = h.envelope(2, "gait", Class::Command, "bodyMove", target(1.0));
+    // gait may send moveBase...
+    let ok = h.envelope(2, "gait", Class::Command, "moveBase", target(1.0));
     let sent = h.send(2, &ok);
     assert_eq!(sent[0].0, 1, "delivered to the controller");
     // ...but not the query `status`, directly or as a monitor's condition.

@@ -1,8 +1,8 @@
-//! Conversions between the message vocabulary (`tca_messages::walking`) and the simulator's
+//! Conversions between the message vocabulary (`tca_single_leg_messages`) and the simulator's
 //! types, and how a simulator error is reported on the bus.
 
 use nalgebra::Point3;
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     BodyPose, CarriagePoint, ForceReading as ForceMessage, HardwareFault, Joints, MoveFailed,
     MoveFailureKind, WorldPoint,
 };

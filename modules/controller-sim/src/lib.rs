@@ -3,7 +3,7 @@
 //!
 //! ```no_run
 //! use tca_controller_sim::{ControllerConfig, SpeedFactor};
-//! use tca_messages::walking::{BodyMove, GlobalLegPosition};
+//! use tca_single_leg_messages::{BodyMove, GlobalLegPosition};
 //! use tca_module::{Connector, Module};
 //!
 //! # async fn run(connector: Connector) -> Result<(), Box<dyn std::error::Error>> {

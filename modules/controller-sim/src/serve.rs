@@ -8,7 +8,7 @@
 
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     BodyMove, BodyPosition, CartLegPosition, ControllerState, ControllerStatus, GlobalLegPosition,
     JointLegPosition, LegMove, ReadForce, SetTransForce,
 };
@@ -30,8 +30,8 @@ use crate::persist::Persistence;
 /// Commands: [`LegMove`], [`BodyMove`], [`SetTransForce`]. Queries: [`BodyPosition`],
 /// [`JointLegPosition`], [`CartLegPosition`], [`GlobalLegPosition`], [`ReadForce`],
 /// [`ControllerStatus`]. A failed `legMove`/`bodyMove` raises
-/// [`MoveFailed`](tca_messages::walking::MoveFailed) (or
-/// [`HardwareFault`](tca_messages::walking::HardwareFault)) in the command's context and ends
+/// [`MoveFailed`](tca_single_leg_messages::MoveFailed) (or
+/// [`HardwareFault`](tca_single_leg_messages::HardwareFault)) in the command's context and ends
 /// the command with failure. A bad configuration is a [`ModuleError::Usage`] saying what to
 /// fix.
 pub async fn connect(

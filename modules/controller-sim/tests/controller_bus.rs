@@ -9,7 +9,7 @@ use nalgebra::Point3;
 use tca_controller_sim::SpeedFactor;
 use tca_controller_sim::sim::{FaultConfig, LegSimulator};
 use tca_messages::control::TaskOutcome;
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     BodyMove, BodyPosition, CartLegPosition, ControllerStatus, GlobalLegPosition, JointLegPosition,
     Joints, LegMove, MoveFailureKind, ReadForce, SetTransForce,
 };

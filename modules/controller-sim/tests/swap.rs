@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use common::{Client, builtin_fast, central, within};
 use tca_messages::control::TaskOutcome;
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     BodyMove, BodyPose, BodyPosition, CarriagePoint, CartLegPosition, ControllerState,
     ControllerStatus, ForceReading, GlobalLegPosition, JointLegPosition, Joints, LegMove,
     ReadForce, SetTransForce, WorldPoint,

@@ -3,7 +3,7 @@
 
 use nalgebra::{Point2, Point3};
 use tca_lrp::TerrainMap;
-use tca_messages::walking::PlanePoint;
+use tca_single_leg_messages::PlanePoint;
 use tca_robot::{CellIndex, ElbowBranch, Grid, LegKinematics, LegParams};
 
 use crate::error::{GaitError, Result};

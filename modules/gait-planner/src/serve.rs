@@ -16,7 +16,7 @@ use std::time::Instant;
 
 use nalgebra::Point2;
 use tca_lrp::TerrainMap;
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     BodyMove, BodyPosition, ElbowSide, GlobalLegPosition, LegReachability, MapKind, MapRegion,
     PlanStep, RecoverLeg, StepPlanned, WorldPoint,
 };

@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix3, Point2, Vector3};
 use tca_lrp::{MapValue, TerrainMap};
-use tca_messages::walking::MapKind;
+use tca_single_leg_messages::MapKind;
 use tca_robot::{CellIndex, Grid, HeightField};
 
 use crate::error::{GaitError, Result};

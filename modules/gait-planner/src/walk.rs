@@ -20,7 +20,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     HardwareFault, MoveFailed, PlanStep, StepStart, Walk, WalkMode, WorldPoint,
 };
 use tca_messages::{MessageId, NodeId};

@@ -15,7 +15,7 @@ use tca_controller_sim::sim::{LegSimulator, StartPose};
 use tca_gait_planner::{GaitConfig, synthetic};
 use tca_lrp::{LrpConfig, MapValue, TerrainMap};
 use tca_messages::control::TaskOutcome;
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     BodyMove, BodyPose, BodyPosition, GlobalLegPosition, JointLegPosition, Joints, LegMove,
     MapKind, MapRegion, PlanStep, StepPlanned, WorldPoint,
 };
@@ -195,7 +195,7 @@ async fn plan_step(client: &Module, step: u32, goal_y_m: f64) -> TaskOutcome {
             &PlanStep {
                 step,
                 goal_y_m,
-                mode: tca_messages::walking::WalkMode::Sequential,
+                mode: tca_single_leg_messages::WalkMode::Sequential,
                 start: None,
                 after_body_move: None,
             },

@@ -11,7 +11,7 @@
 //! - [`calibrate`]: the whole procedure with a virtual scanner.
 
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
-use tca_messages::walking::RangeImage;
+use tca_single_leg_messages::RangeImage;
 use tca_robot::CarriagePose;
 
 use crate::error::{IsmError, Result};

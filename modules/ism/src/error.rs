@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use tca_messages::walking::SensorKind;
+use tca_single_leg_messages::SensorKind;
 
 /// What can go wrong acquiring, reading, checking or calibrating images.
 #[derive(Debug, thiserror::Error)]

@@ -9,7 +9,7 @@
 //!   view, range digitisation and wrapping, each pixel's ray, and the check that an image fits
 //!   its sensor.
 //! - [`frames`]: the chain `locus <- scanner <- body <- global` ([`ImageFrames`]) and the
-//!   wire [`Transform`](tca_messages::walking::Transform) conversions.
+//!   wire [`Transform`](tca_single_leg_messages::Transform) conversions.
 //! - [`noise`]: the seeded range/reflectance noise and the reflectance model.
 //! - [`sensor`]: the [`RangeSensor`] trait every sensor implements.
 //! - [`scanner`]: [`VirtualScanner`], the ray-casting scanner (rows cast in parallel).
@@ -20,7 +20,7 @@
 //!   `acquireImage`, asking the Controller for `bodyPosition`.
 //! - [`error`]: [`IsmError`] and the [`Result`] alias.
 //!
-//! Images travel as the wire type [`RangeImage`](tca_messages::walking::RangeImage): range
+//! Images travel as the wire type [`RangeImage`](tca_single_leg_messages::RangeImage): range
 //! counts wrapped at the ambiguity interval, reflectance counts (0 = no return), and the three
 //! transforms of the chain.
 

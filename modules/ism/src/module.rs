@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use tca_messages::walking::{AcquireImage, BodyPosition, RangeImage, SensorKind};
+use tca_single_leg_messages::{AcquireImage, BodyPosition, RangeImage, SensorKind};
 use tca_module::{Connector, HandlerError, Module, ModuleError};
 use tca_robot::{HeightField, LegParams};
 

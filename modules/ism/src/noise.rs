@@ -7,7 +7,7 @@
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tca_messages::walking::SensorKind;
+use tca_single_leg_messages::SensorKind;
 
 /// Range and reflectance noise. The range noise's standard deviation grows linearly with the
 /// range: `sigma(r) = range_sigma_m + range_sigma_per_m * r`.

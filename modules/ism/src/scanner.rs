@@ -11,7 +11,7 @@
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3, Vector3};
-use tca_messages::walking::RangeImage;
+use tca_single_leg_messages::RangeImage;
 use tca_robot::params::CarriageParams;
 use tca_robot::{CarriagePose, HeightField, LegParams};
 
@@ -322,7 +322,7 @@ impl RangeSensor for VirtualScanner {
 mod tests {
     use super::*;
     use nalgebra::Point2;
-    use tca_messages::walking::SensorKind;
+    use tca_single_leg_messages::SensorKind;
 
     use crate::frames::ImageFrames;
 

@@ -1,6 +1,6 @@
 //! What the ISM asks of a sensor, real or virtual (§5.2.1).
 
-use tca_messages::walking::RangeImage;
+use tca_single_leg_messages::RangeImage;
 use tca_robot::CarriagePose;
 
 use crate::error::Result;

@@ -18,7 +18,7 @@
 //! A pixel whose reflectance count is 0 had no return (nothing within the sensor's reach).
 
 use nalgebra::Vector3;
-use tca_messages::walking::{RangeImage, SensorKind};
+use tca_single_leg_messages::{RangeImage, SensorKind};
 
 use crate::error::{IsmError, Result};
 

@@ -21,7 +21,7 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use tca_messages::walking::{RangeImage, SensorKind, Transform};
+use tca_single_leg_messages::{RangeImage, SensorKind, Transform};
 use tca_robot::CarriagePose;
 
 use crate::error::{IsmError, Result};

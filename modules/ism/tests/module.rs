@@ -8,7 +8,7 @@ use nalgebra::Point2;
 use tca_central::StartOptions;
 use tca_ism::stored::write_sequence_image;
 use tca_ism::{ImageFrames, IsmConfig, SensorSpec, StoredSequence, VirtualScanner};
-use tca_messages::walking::{AcquireImage, BodyPose, BodyPosition, SensorKind};
+use tca_single_leg_messages::{AcquireImage, BodyPose, BodyPosition, SensorKind};
 use tca_module::{Connector, Module};
 use tca_robot::{CarriagePose, HeightField, LegParams};
 

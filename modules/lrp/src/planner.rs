@@ -5,7 +5,7 @@ use std::borrow::Cow;
 use std::collections::VecDeque;
 
 use nalgebra::{Point2, Point3};
-use tca_messages::walking::{Joints, LegMove};
+use tca_single_leg_messages::{Joints, LegMove};
 use tca_robot::{CarriagePose, ElbowBranch, Grid, JointPosition, LegKinematics, LegParams};
 
 use crate::cost::MotionCost;

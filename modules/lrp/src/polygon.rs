@@ -2,7 +2,7 @@
 //! `legReachability` vocabulary): validation, bounding grid, and point inclusion.
 
 use nalgebra::Point2;
-use tca_messages::walking::PlanePoint;
+use tca_single_leg_messages::PlanePoint;
 use tca_robot::Grid;
 
 use crate::error::{PlanError, Result};

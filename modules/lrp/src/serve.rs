@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use nalgebra::{Point2, Point3};
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     BodyPosition, ElbowSide, JointLegPosition, Joints, LegReachability, MapCell, MapGrid, MapKind,
     MapRegion, MoveFailed, MoveFailureKind, RecoverLeg, WorldPoint,
 };

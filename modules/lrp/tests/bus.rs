@@ -16,7 +16,7 @@ use tca_central::{RunningCentral, StartOptions};
 use tca_controller_sim::sim::{LegSimulator, StartPose};
 use tca_lrp::{LrpConfig, MapValue, TerrainMap};
 use tca_messages::control::TaskOutcome;
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     BodyPose, BodyPosition, GlobalLegPosition, JointLegPosition, Joints, LegMove, LegReachability,
     MapCell, MapGrid, MapKind, MapRegion, MoveFailed, MoveFailureKind, PlanePoint, RecoverLeg,
     WorldPoint,

@@ -45,7 +45,7 @@
 
 use nalgebra::{Point3, Vector3};
 use tca_ism::{ImageFrames, NoiseModel, PixelDirections, SensorSpec};
-use tca_messages::walking::{RangeImage, SensorKind};
+use tca_single_leg_messages::{RangeImage, SensorKind};
 
 use crate::cell::Cell;
 use crate::error::{LtmError, Result, check_resolution};

@@ -1,7 +1,7 @@
 //! One cell of the local terrain map, and how two observations of it are fused (the LTM
 //! Merger's maximum-likelihood rule).
 
-use tca_messages::walking::MapCell;
+use tca_single_leg_messages::MapCell;
 
 /// What is known about a cell.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -101,7 +101,7 @@ pub enum LtmError {
          uncertainty, footfall and slope maps); reachability maps come from the Leg Recovery \
          Planner (legReachability)"
     )]
-    UnsupportedKind(tca_messages::walking::MapKind),
+    UnsupportedKind(tca_single_leg_messages::MapKind),
     /// A configuration value is out of range.
     #[error("invalid LTM configuration: {0}")]
     Config(String),

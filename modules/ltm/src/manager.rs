@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use nalgebra::Point2;
 use tca_ism::ImageFrames;
-use tca_messages::walking::{MapGrid, MapKind, MapRegion, RangeImage, SensorKind};
+use tca_single_leg_messages::{MapGrid, MapKind, MapRegion, RangeImage, SensorKind};
 
 use crate::builder::{BuilderConfig, build_map};
 use crate::cell::{Cell, fuse};

@@ -9,7 +9,7 @@
 
 use std::sync::{Arc, Mutex};
 
-use tca_messages::walking::{AcquireImage, MapGrid, MapRegion};
+use tca_single_leg_messages::{AcquireImage, MapGrid, MapRegion};
 use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
 
 use crate::manager::{LtmConfig, TerrainMap};

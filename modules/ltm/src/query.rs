@@ -17,7 +17,7 @@
 use std::collections::HashMap;
 
 use nalgebra::Point2;
-use tca_messages::walking::{MapCell, MapGrid, MapKind};
+use tca_single_leg_messages::{MapCell, MapGrid, MapKind};
 
 use crate::cell::{Cell, CellState};
 use crate::error::Result;

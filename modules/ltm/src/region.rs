@@ -3,7 +3,7 @@
 //! overlapping requests share cells, with cells whose centre is outside the polygon unknown.
 
 use nalgebra::Point2;
-use tca_messages::walking::PlanePoint;
+use tca_single_leg_messages::PlanePoint;
 
 use crate::error::{LtmError, Result, check_resolution};
 use crate::patch::lattice_index;

@@ -6,7 +6,7 @@ use common::{BOX, image, rect, scanner, terrain};
 use nalgebra::Point2;
 use tca_ism::SensorSpec;
 use tca_ltm::{BuilderConfig, CellState, LtmConfig, LtmError, TerrainMap, build_map};
-use tca_messages::walking::{MapCell, MapKind, MapRegion, PlanePoint};
+use tca_single_leg_messages::{MapCell, MapKind, MapRegion, PlanePoint};
 
 fn config() -> LtmConfig {
     LtmConfig {

@@ -12,7 +12,7 @@ use common::{BOX, params, rect, terrain};
 use tca_central::StartOptions;
 use tca_ism::{IsmConfig, SensorSpec, VirtualScanner};
 use tca_ltm::LtmConfig;
-use tca_messages::walking::{BodyPose, BodyPosition, MapCell, MapKind, MapRegion};
+use tca_single_leg_messages::{BodyPose, BodyPosition, MapCell, MapKind, MapRegion};
 use tca_module::{Connector, Module};
 
 async fn within<T>(what: &str, f: impl Future<Output = T>) -> T {

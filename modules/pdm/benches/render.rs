@@ -10,7 +10,7 @@ use std::sync::Arc;
 use criterion::{Criterion, criterion_group, criterion_main};
 use tca_ism::{SensorSpec, VirtualScanner};
 use tca_ltm::{LtmConfig, TerrainMap};
-use tca_messages::walking::{MapGrid, MapKind, MapRegion, Overlay, PlanePoint, WorldPoint};
+use tca_single_leg_messages::{MapGrid, MapKind, MapRegion, Overlay, PlanePoint, WorldPoint};
 use tca_pdm::{RenderOptions, render, render_png};
 use tca_robot::{CarriagePose, Course, LegParams};
 

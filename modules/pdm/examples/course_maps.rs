@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use tca_ism::{SensorSpec, VirtualScanner};
 use tca_ltm::{LtmConfig, TerrainMap};
-use tca_messages::walking::{MapKind, MapRegion, Overlay, PlanePoint, WorldPoint};
+use tca_single_leg_messages::{MapKind, MapRegion, Overlay, PlanePoint, WorldPoint};
 use tca_pdm::{RenderOptions, write_png};
 use tca_robot::{CarriagePose, Course, LegParams};
 

@@ -4,7 +4,7 @@
 //!
 //! # Layout
 //!
-//! - [`render`](mod@render): a [`MapGrid`](tca_messages::walking::MapGrid) and its overlays -> a
+//! - [`render`](mod@render): a [`MapGrid`](tca_single_leg_messages::MapGrid) and its overlays -> a
 //!   [`Picture`]: colour ramp, unknown/occluded patterns, colour scale, distance scale bar,
 //!   extent, overlays; [`render_png`] and [`write_png`].
 //! - [`canvas`]: the RGB [`Picture`], drawing primitives and PNG encoding.

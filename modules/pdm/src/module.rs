@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use tca_messages::walking::RenderMap;
+use tca_single_leg_messages::RenderMap;
 use tca_module::{Connector, HandlerError, Module, ModuleError};
 
 use crate::error::{PdmError, Result};

@@ -8,7 +8,7 @@
 
 use std::path::Path;
 
-use tca_messages::walking::{MapCell, MapGrid, MapKind, Overlay, WorldPoint};
+use tca_single_leg_messages::{MapCell, MapGrid, MapKind, Overlay, WorldPoint};
 
 use crate::canvas::{Picture, Rgb};
 use crate::error::{PdmError, Result};

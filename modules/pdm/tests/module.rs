@@ -10,7 +10,7 @@ use tca_central::StartOptions;
 use tca_ism::{IsmConfig, SensorSpec, VirtualScanner};
 use tca_ltm::LtmConfig;
 use tca_messages::control::TaskOutcome;
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     BodyPose, BodyPosition, MapKind, MapRegion, Overlay, PlanePoint, RenderMap, WorldPoint,
 };
 use tca_module::{Connector, Module};

@@ -6,7 +6,7 @@ use std::sync::Arc;
 use nalgebra::Point2;
 use tca_ism::{SensorSpec, VirtualScanner};
 use tca_ltm::{LtmConfig, TerrainMap};
-use tca_messages::walking::{
+use tca_single_leg_messages::{
     MapCell, MapGrid, MapKind, MapRegion, Overlay, PlanePoint, WorldPoint,
 };
 use tca_pdm::render::{OCCLUDED_COLOURS, OVERLAY, UNKNOWN_COLOURS, ramp};

@@ -2,16 +2,16 @@
 //! §3.2), shared by the tests and the benchmark.
 //!
 //! Per step `k`: the Gait Planner handles the goal `planGait k`, which issues the goal
-//! `legMove k` (handled by the Leg Recovery Planner, which issues the command `legMove
-//! k`) and the command `bodyMove k`, and issues `planGait k+1` under the walk goal. Each
+//! `moveArm k` (handled by the Leg Recovery Planner, which issues the command `moveArm
+//! k`) and the command `moveBase k`, and issues `planGait k+1` under the walk goal. Each
 //! module handles one message at a time (TCA's resource management), and each handler
 //! takes a fixed time. Constraints:
 //!
-//! - always: the legMove goal of step k is achieved before bodyMove k starts, and the
-//!   legMove goal of step k+1 is not achieved before bodyMove k is (its planning may run
+//! - always: the moveArm goal of step k is achieved before moveBase k starts, and the
+//!   moveArm goal of step k+1 is not achieved before moveBase k is (its planning may run
 //!   ahead, its command may not);
-//! - sequential: `planGait k+1` is not planned until `bodyMove k` is achieved;
-//! - concurrent: `planGait k+1` waits only for `bodyMove k-1`, so step k+1 is planned
+//! - sequential: `planGait k+1` is not planned until `moveBase k` is achieved;
+//! - concurrent: `planGait k+1` waits only for `moveBase k-1`, so step k+1 is planned
 //!   while step k executes.
 #![allow(dead_code)]
 
@@ -32,9 +32,9 @@ pub(crate) enum Mode {
 pub(crate) enum Role {
     Walk,
     PlanGait(u32),
-    LegMoveGoal(u32),
-    LegMove(u32),
-    BodyMove(u32),
+    MoveArmGoal(u32),
+    MoveArm(u32),
+    MoveBase(u32),
 }
 
 impl Role {
@@ -44,8 +44,8 @@ impl Role {
         match self {
             Role::Walk => 0,
             Role::PlanGait(_) => 1,
-            Role::LegMoveGoal(_) => 2,
-            Role::LegMove(_) | Role::BodyMove(_) => 3,
+            Role::MoveArmGoal(_) => 2,
+            Role::MoveArm(_) | Role::MoveBase(_) => 3,
         }
     }
 
@@ -61,7 +61,7 @@ pub(crate) struct Durations {
     pub(crate) plan_gait: Nanos,
     pub(crate) lrp: Nanos,
     pub(crate) leg_move: Nanos,
-    pub(crate) body_move: Nanos,
+    pub(crate) base_move: Nanos,
 }
 
 impl Durations {
@@ -71,16 +71,16 @@ impl Durations {
         plan_gait: 2,
         lrp: 1,
         leg_move: 5,
-        body_move: 4,
+        base_move: 4,
     };
 
     fn of(&self, role: Role) -> Nanos {
         match role {
             Role::Walk => self.walk,
             Role::PlanGait(_) => self.plan_gait,
-            Role::LegMoveGoal(_) => self.lrp,
-            Role::LegMove(_) => self.leg_move,
-            Role::BodyMove(_) => self.body_move,
+            Role::MoveArmGoal(_) => self.lrp,
+            Role::MoveArm(_) => self.leg_move,
+            Role::MoveBase(_) => self.base_move,
         }
     }
 }
@@ -96,8 +96,8 @@ pub(crate) struct WalkSim {
     /// bounded like the tree's).
     roles: HashMap<NodeId, Role>,
     walk: NodeId,
-    /// bodyMove of the last steps, by step (older ones are dropped).
-    body_moves: HashMap<u32, NodeId>,
+    /// moveBase of the last steps, by step (older ones are dropped).
+    base_moves: HashMap<u32, NodeId>,
     queues: [VecDeque<NodeId>; 4],
     busy: [bool; 4],
     running: BinaryHeap<Reverse<(Nanos, u64, NodeId)>>,
@@ -124,7 +124,7 @@ impl WalkSim {
             durations,
             roles: HashMap::new(),
             walk: NodeId(0),
-            body_moves: HashMap::new(),
+            base_moves: HashMap::new(),
             queues: Default::default(),
             busy: [false; 4],
             running: BinaryHeap::new(),
@@ -167,11 +167,11 @@ impl WalkSim {
         let name = match role {
             Role::Walk => "walk",
             Role::PlanGait(_) => "planGait",
-            Role::LegMoveGoal(_) | Role::LegMove(_) => "legMove",
-            Role::BodyMove(_) => "bodyMove",
+            Role::MoveArmGoal(_) | Role::MoveArm(_) => "moveArm",
+            Role::MoveBase(_) => "moveBase",
         };
         let mut spec = match role {
-            Role::LegMove(_) | Role::BodyMove(_) => NodeSpec::command(name, role.handler()),
+            Role::MoveArm(_) | Role::MoveBase(_) => NodeSpec::command(name, role.handler()),
             _ => NodeSpec::goal(name, role.handler()),
         };
         spec.parent = parent;
@@ -201,19 +201,19 @@ impl WalkSim {
                 self.add(Role::PlanGait(1), Some(id), Vec::new());
             }
             Role::PlanGait(k) => {
-                let previous_body = self.body_moves.get(&(k - 1)).copied();
+                let previous_body = self.base_moves.get(&(k - 1)).copied();
                 let leg_with = previous_body
                     .map(NewConstraint::sequential_achievement_after)
                     .into_iter()
                     .collect();
-                let leg = self.add(Role::LegMoveGoal(k), Some(id), leg_with);
+                let leg = self.add(Role::MoveArmGoal(k), Some(id), leg_with);
                 let body = self.add(
-                    Role::BodyMove(k),
+                    Role::MoveBase(k),
                     Some(id),
                     vec![NewConstraint::sequential_achievement_after(leg)],
                 );
-                self.body_moves.insert(k, body);
-                self.body_moves.remove(&k.saturating_sub(2));
+                self.base_moves.insert(k, body);
+                self.base_moves.remove(&k.saturating_sub(2));
                 if k < self.steps {
                     let wait_for = match self.mode {
                         Mode::Sequential => Some(body),
@@ -227,10 +227,10 @@ impl WalkSim {
                 }
                 self.sample(k);
             }
-            Role::LegMoveGoal(k) => {
-                self.add(Role::LegMove(k), Some(id), Vec::new());
+            Role::MoveArmGoal(k) => {
+                self.add(Role::MoveArm(k), Some(id), Vec::new());
             }
-            Role::LegMove(_) | Role::BodyMove(_) => {}
+            Role::MoveArm(_) | Role::MoveBase(_) => {}
         }
     }
 

@@ -2,7 +2,7 @@
 //! clock, and what queries see during a move. Wall-clock instants are given, never waited.
 
 use nalgebra::{Point2, Point3};
-use tca_messages::walking::MoveFailureKind;
+use tca_single_leg_messages::MoveFailureKind;
 use tca_robot::{CarriagePose, ElbowBranch, HeightField, LegKinematics, LegParams};
 
 use super::*;

@@ -14,7 +14,7 @@ use tca_controller_sim::sim::StartPose;
 use tca_controller_sim::{ControllerConfig, SpeedFactor};
 use tca_messages::NodeId;
 use tca_messages::control::TaskOutcome;
-use tca_messages::walking::{BodyMove, HardwareFault, LegMove, MoveFailed, SetTransForce};
+use tca_single_leg_messages::{BodyMove, HardwareFault, LegMove, MoveFailed, SetTransForce};
 use tca_module::{Connector, HandlerError, Module};
 use tca_robot::{CarriagePose, ElbowBranch, HeightField, LegKinematics, LegParams};
 use tokio::sync::mpsc;

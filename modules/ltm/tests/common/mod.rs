@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use nalgebra::Point2;
 use tca_ism::{NoiseModel, SensorSpec, VirtualScanner};
-use tca_messages::walking::{PlanePoint, RangeImage};
+use tca_single_leg_messages::{PlanePoint, RangeImage};
 use tca_robot::{CarriagePose, HeightField, LegParams};
 
 /// Sample spacing of the test terrains, metres.

@@ -7,7 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::message;
+use tca_messages::message;
 
 // ---------------------------------------------------------------------------------------------
 // Geometry
@@ -398,7 +398,7 @@ pub struct PlanStep {
     pub start: Option<StepStart>,
     /// The previous step's body move (concurrent mode): this step's leg move is planned and
     /// executed only after it is achieved.
-    pub after_body_move: Option<crate::MessageId>,
+    pub after_body_move: Option<tca_messages::MessageId>,
 }
 message!(PlanStep: goal "planStep");
 
@@ -455,3 +455,40 @@ pub struct StepPlanned {
     pub cost: f64,
 }
 message!(StepPlanned: inform "stepPlanned");
+
+#[cfg(test)]
+mod tests {
+    use tca_messages::{Class, Message};
+
+    use super::*;
+
+    #[test]
+    fn every_message_has_a_format() {
+        fn check<M: Message>() {
+            let f = M::format().unwrap_or_else(|e| panic!("{}: {e}", M::NAME));
+            f.validate().unwrap();
+            if M::CLASS == Class::Query {
+                assert!(M::reply_format().unwrap().is_some(), "{}", M::NAME);
+            }
+        }
+        check::<BodyMove>();
+        check::<LegMove>();
+        check::<SetTransForce>();
+        check::<BodyPosition>();
+        check::<JointLegPosition>();
+        check::<CartLegPosition>();
+        check::<GlobalLegPosition>();
+        check::<ReadForce>();
+        check::<ControllerStatus>();
+        check::<MoveFailed>();
+        check::<HardwareFault>();
+        check::<AcquireImage>();
+        check::<MapRegion>();
+        check::<RenderMap>();
+        check::<Walk>();
+        check::<PlanStep>();
+        check::<RecoverLeg>();
+        check::<LegReachability>();
+        check::<StepPlanned>();
+    }
+}
