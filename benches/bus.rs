@@ -11,13 +11,17 @@ use std::time::{Duration, Instant};
 
 use bytes::Bytes;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use tca::builtin::echo::{self, Ping, PingGoal};
 use tca_central::{Action, Central, CentralConfig, Event, StartOptions};
 use tca_messages::control::{Hello, Register, names};
 use tca_messages::*;
 use tca_module::{Connector, Module, ModuleError};
+use tca_ping::echo::{self, Ping, PingGoal};
 use tokio::runtime::Runtime;
 use tokio::sync::{Notify, mpsc};
+
+/// The allocator the `tca` command uses, so that what is measured here is what it runs.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn runtime() -> Runtime {
     tokio::runtime::Builder::new_multi_thread()

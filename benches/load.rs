@@ -1,4 +1,4 @@
-//! Load benchmark (issue 8): 100 modules exchange queries, goals and informs with randomly
+//! Load benchmark: 100 modules exchange queries, goals and informs with randomly
 //! chosen other modules through one central, its traffic log on, for 60 s, in-process and then
 //! over zenoh loopback. Prints, for each run, what was sent, handled and answered per class
 //! (and fails if anything was lost), the messages per second, central's queue high-water marks
@@ -13,8 +13,12 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use anyhow::Context as _;
-use tca::load::{LoadOptions, Transport};
 use tca_central::CentralConfig;
+use tca_load::{LoadOptions, Transport};
+
+/// The allocator the `tca` command uses, so that what is measured here is what it runs.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn setting<T: std::str::FromStr>(name: &str, default: T) -> anyhow::Result<T> {
     match std::env::var(name) {
@@ -63,7 +67,7 @@ fn main() -> anyhow::Result<ExitCode> {
             ..base.clone()
         };
         let dir = tempfile::tempdir().context("no temporary directory for the log")?;
-        let report = runtime.block_on(tca::load::run(&options, dir.path()))?;
+        let report = runtime.block_on(tca_load::run(&options, dir.path()))?;
         print!("{}", report.table());
         ok &= report.losses().is_empty() && report.past_limits().is_empty();
     }

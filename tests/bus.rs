@@ -8,11 +8,11 @@ use std::time::Duration;
 
 use common::*;
 use serde::{Deserialize, Serialize};
-use tca::builtin::echo::{self, Ping};
 use tca_central::StartOptions;
 use tca_messages::control::TaskOutcome;
 use tca_messages::{Class, RouteError};
 use tca_module::{HandlerError, Module, ModuleError};
+use tca_ping::echo::{self, Ping};
 
 /// Where the carriage is, in metres along the rails.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -128,7 +128,7 @@ async fn a_walk_interrupted_by_a_central_crash_resumes_where_the_leg_stands() {
     assert_eq!(report["collisions"], 0, "{report}");
     let resumed_from = report["start_y_m"].as_f64().unwrap();
     assert!(
-        resumed_from > tca::walk::START_Y_M + 0.3,
+        resumed_from > tca_walk::START_Y_M + 0.3,
         "resumed from y = {resumed_from} m, not from where the leg stood"
     );
 }

@@ -6,7 +6,7 @@
 
 use std::time::Duration;
 
-use tca::load::{LoadOptions, Transport};
+use tca_load::{LoadOptions, Transport};
 
 /// Far above what 100 modules need (about 100 MiB), far below what unbounded queues take.
 const PEAK_RSS_LIMIT_KIB: u64 = 1 << 20;
@@ -27,7 +27,7 @@ fn a_hundred_modules_lose_nothing_and_central_stays_bounded() {
         };
         let dir = tempfile::tempdir().unwrap();
         let report = runtime
-            .block_on(tca::load::run(&options, dir.path()))
+            .block_on(tca_load::run(&options, dir.path()))
             .unwrap();
         let table = report.table();
         assert_eq!(report.losses(), Vec::<String>::new(), "{table}");

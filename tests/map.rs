@@ -9,10 +9,10 @@ use std::process::{Command, Output, Stdio};
 use std::sync::OnceLock;
 
 use common::*;
-use tca::walk::{SystemSetup, TerrainChoice};
 use tca_central::StartOptions;
-use tca_single_leg_messages::{MapCell, MapGrid, MapKind};
 use tca_module::Module;
+use tca_single_leg_messages::{MapCell, MapGrid, MapKind};
+use tca_walk::{SystemSetup, TerrainChoice};
 
 fn tca(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_tca"))
@@ -221,7 +221,7 @@ fn overlay_pixels(rgb: &[u8]) -> usize {
 fn footfalls_and_earlier_maps_come_from_the_log() {
     let dir = tempfile::tempdir().unwrap();
     let log = walk_log();
-    let recorded = tca::map::read_walk(
+    let recorded = tca_map_view::read_walk(
         &tca_logs::LogFile::open(log).unwrap(),
         tca_logs::TimeBase::Envelope,
     );
@@ -389,7 +389,7 @@ async fn a_running_system_draws_its_map_over_zenoh() {
         modules.push(
             within(
                 name,
-                tca::walk::connect_module(name, &central.connector, &setup),
+                tca_walk::connect_module(name, &central.connector, &setup),
             )
             .await
             .unwrap(),

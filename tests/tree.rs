@@ -568,8 +568,8 @@ async fn log_stats_give_the_figure18_breakdown_in_simulated_time() {
     assert_eq!(stats.by_name["planGait"], 3);
     let dir = tempfile::tempdir().unwrap();
     let png = dir.path().join("timeline.png");
-    tca::timeline::write_png(&stats, &png).unwrap();
+    tca_timeline::write_png(&stats, &png).unwrap();
     assert!(std::fs::metadata(&png).unwrap().len() > 1000);
-    let text = tca::timeline::text(&stats, 3);
+    let text = tca_timeline::text(&stats, 3);
     assert!(text.contains("controller"), "{text}");
 }

@@ -4,8 +4,8 @@
 mod common;
 
 use common::within;
-use tca::walk::{ComputeModel, TerrainChoice, WalkOptions, WalkReport};
 use tca_single_leg_messages::WalkMode;
+use tca_walk::{ComputeModel, TerrainChoice, WalkOptions, WalkReport};
 use tokio::sync::mpsc;
 
 fn options(terrain: TerrainChoice, seed: u64) -> WalkOptions {
@@ -24,7 +24,7 @@ fn options(terrain: TerrainChoice, seed: u64) -> WalkOptions {
 
 async fn walk(options: WalkOptions) -> WalkReport {
     let (tx, _rx) = mpsc::unbounded_channel();
-    within("walk", tca::walk::walk(&options, tx))
+    within("walk", tca_walk::walk(&options, tx))
         .await
         .expect("the walk runs")
 }

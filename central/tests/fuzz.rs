@@ -25,9 +25,10 @@ use tca_logs::{
     Direction, FrameRecord, LinkEvent, LinkRecord, LogFile, LogRecord, LogWriter, ProblemRecord,
     RecordKind, RegisteredRecord, ShowFilter,
 };
-use tca_messages::control::{ControlKind, ControlRequest, 
-    AuthHello, Constrain, Credentials, Hello, Kill, Monitor, MonitorAction, Register,
-    RegisterOutcome, Registration, Registry, TaskEnded, TreeView, Welcome, names,
+use tca_messages::control::{
+    AuthHello, Constrain, ControlKind, ControlRequest, Credentials, Hello, Kill, Monitor,
+    MonitorAction, Register, RegisterOutcome, Registration, Registry, TaskEnded, TreeView, Welcome,
+    names,
 };
 use tca_messages::{
     Class, ConstraintSpec, DataFormat, Envelope, Failure, MessageId, MessageName, ModuleName,

@@ -843,9 +843,7 @@ mod tests {
         );
         assert_eq!(c.divergences.len(), 1);
         assert!(
-            c.divergences[0]
-                .to_string()
-                .contains("field after_move"),
+            c.divergences[0].to_string().contains("field after_move"),
             "{:?}",
             c.divergences
         );

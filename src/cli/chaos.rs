@@ -5,8 +5,8 @@ use std::process::ExitCode;
 
 use anyhow::Context as _;
 use clap::Args;
-use tca::chaos::ChaosOptions;
-use tca::walk::{ComputeModel, TerrainChoice};
+use tca_chaos::ChaosOptions;
+use tca_walk::TerrainChoice;
 
 #[derive(Debug, Args)]
 pub(crate) struct ChaosArgs {
@@ -36,8 +36,8 @@ pub(crate) struct ChaosArgs {
     #[arg(long, value_name = "FACTOR")]
     speed: Option<f64>,
     /// What the planners charge to simulated time: "paper" or "measured".
-    #[arg(long, value_enum, default_value_t = ComputeModel::Paper)]
-    compute: ComputeModel,
+    #[arg(long, value_enum, default_value_t = super::Compute::Paper)]
+    compute: super::Compute,
     /// Directory for the traffic log and the modules' state.
     #[arg(long, value_name = "DIR", default_value = "out/chaos")]
     out: PathBuf,
@@ -62,15 +62,15 @@ pub(crate) async fn run(args: ChaosArgs) -> anyhow::Result<ExitCode> {
         terrain_args,
         seed: args.seed,
         speed: args.speed,
-        compute: args.compute,
+        compute: args.compute.into(),
         out: args.out.clone(),
         listen: args.listen.clone(),
         exe: std::env::current_exe().context("cannot find the tca executable")?,
         victims: args.victims.clone(),
         concurrent: args.concurrent,
     };
-    let report = tca::chaos::run(&options, |line| eprintln!("{line}")).await?;
-    print!("{}", tca::chaos::summary(&report));
+    let report = tca_chaos::run(&options, |line| eprintln!("{line}")).await?;
+    print!("{}", tca_chaos::summary(&report));
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     }

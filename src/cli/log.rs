@@ -95,7 +95,7 @@ pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
             if args.json {
                 println!("{}", serde_json::to_string(&audit)?);
             } else {
-                print!("{}", tca::chaos::audit_text(&audit));
+                print!("{}", tca_chaos::audit_text(&audit));
                 if let Some(t) = &log.truncated {
                     println!(
                         "note: the log ends early ({t}); messages in flight then show as lost"
@@ -127,7 +127,7 @@ pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
             let stats = tca_logs::stats(&log, base);
             let steps = stats.by_name.get(&args.step).copied().unwrap_or(0);
             if let Some(png) = &args.png {
-                tca::timeline::write_png(&stats, png)
+                tca_timeline::write_png(&stats, png)
                     .with_context(|| format!("cannot write {}", png.display()))?;
             }
             if args.json {
@@ -140,7 +140,7 @@ pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
                 };
                 println!("{v}");
             } else {
-                print!("{}", tca::timeline::text(&stats, steps));
+                print!("{}", tca_timeline::text(&stats, steps));
             }
             Ok(ExitCode::SUCCESS)
         }

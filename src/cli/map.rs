@@ -5,11 +5,11 @@ use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::Args;
-use tca::map::{
+use tca_logs::TimeBase;
+use tca_map_view::{
     DEFAULT_RESOLUTION_M, LiveMapOptions, LogMapOptions, MapArea, MapRequest, parse_kind,
     parse_polygon, parse_rectangle,
 };
-use tca_logs::TimeBase;
 use tca_module::Connector;
 
 use super::ConnectArgs;
@@ -111,7 +111,7 @@ pub(crate) async fn run(args: MapArgs) -> anyhow::Result<ExitCode> {
             };
             let (log, out) = (log.clone(), args.out.clone());
             tokio::task::spawn_blocking(move || {
-                tca::map::map_from_log(&log, &request, &options, &out)
+                tca_map_view::map_from_log(&log, &request, &options, &out)
             })
             .await??
         }
@@ -128,7 +128,7 @@ pub(crate) async fn run(args: MapArgs) -> anyhow::Result<ExitCode> {
                 timeout: Duration::from_secs_f64(args.timeout.min(86_400.0)),
             };
             let connector = Connector::zenoh(args.connect.endpoint_or_default());
-            tca::map::map_from_system(&connector, &request, &options, &args.out).await?
+            tca_map_view::map_from_system(&connector, &request, &options, &args.out).await?
         }
     };
     eprintln!("{}", picture.summary());

@@ -14,7 +14,7 @@ mod walk;
 
 use std::process::ExitCode;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, Parser, Subcommand, ValueEnum};
 use tca_central::DEFAULT_ENDPOINT;
 
 /// Task Control Architecture: central control, modules and the tools around them.
@@ -65,6 +65,24 @@ impl ConnectArgs {
         self.connect
             .clone()
             .unwrap_or_else(|| DEFAULT_ENDPOINT.to_owned())
+    }
+}
+
+/// What the planners' computing costs in simulated time (`--compute`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum Compute {
+    /// The 1990 system's planning times (§7.2).
+    Paper,
+    /// What the computing measures on this machine.
+    Measured,
+}
+
+impl From<Compute> for tca_walk::ComputeModel {
+    fn from(c: Compute) -> Self {
+        match c {
+            Compute::Paper => tca_walk::ComputeModel::Paper,
+            Compute::Measured => tca_walk::ComputeModel::Measured,
+        }
     }
 }
 

@@ -8,6 +8,10 @@ use tca_module::Connector;
 
 use super::ConnectArgs;
 
+/// Names of the built-in modules: the echo of `tca ping` and the six walking modules.
+pub(crate) const BUILTIN_MODULES: &[&str] =
+    &["echo", "controller", "ism", "ltm", "pdm", "lrp", "gait"];
+
 #[derive(Debug, Args)]
 pub(crate) struct ModuleArgs {
     /// The built-in module to run: echo, controller, ism, ltm, pdm, lrp or gait.
@@ -31,8 +35,8 @@ pub(crate) struct ModuleArgs {
     pictures: bool,
     /// What the planners' computing costs in simulated time: "paper" (the 1990 system's
     /// times) or "measured".
-    #[arg(long, value_enum, default_value_t = tca::walk::ComputeModel::Paper)]
-    compute: tca::walk::ComputeModel,
+    #[arg(long, value_enum, default_value_t = super::Compute::Paper)]
+    compute: super::Compute,
     /// The Controller simulator's speed: simulated time runs FACTOR times faster than the
     /// wall clock (1 = real time, as the 1990 testbed). Default: as fast as it computes.
     #[arg(long, value_name = "FACTOR")]
@@ -54,22 +58,31 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
         .unwrap_or_else(|| args.connect.endpoint_or_default());
     let connector = Connector::zenoh(endpoint.clone());
     let terrain =
-        tca::walk::TerrainChoice::from_args(&args.course, args.terrain.as_deref(), args.seed)?;
-    let options = tca::builtin::ModuleOptions {
+        tca_walk::TerrainChoice::from_args(&args.course, args.terrain.as_deref(), args.seed)?;
+    let options = tca_walk::ModuleOptions {
         terrain,
         seed: args.seed,
         out: args.out.clone(),
         pictures: args.pictures,
-        compute: args.compute,
+        compute: args.compute.into(),
         speed: match args.speed {
             Some(f) => tca_controller_sim::SpeedFactor::Times(f),
             None => tca_controller_sim::SpeedFactor::AsFastAsPossible,
         },
         state_dir: args.state.clone(),
     };
-    let module = tca::builtin::connect(&args.name, &connector, &options)
-        .await
-        .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
+    let module = if args.name == "echo" {
+        tca_ping::echo::connect(&connector, "echo").await
+    } else if tca_walk::WALKING_MODULES.contains(&args.name.as_str()) {
+        tca_walk::connect_standalone(&args.name, &connector, &options).await
+    } else {
+        anyhow::bail!(
+            "no built-in module named {:?}; built-in modules: {}",
+            args.name,
+            BUILTIN_MODULES.join(", ")
+        );
+    }
+    .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
     eprintln!("module {} connected to central at {endpoint}", args.name);
     tokio::select! {
         r = tokio::signal::ctrl_c() => { r.context("cannot wait for Ctrl-C")?; }

@@ -31,7 +31,7 @@ pub(crate) async fn run(args: PingArgs) -> anyhow::Result<ExitCode> {
     let (report, where_) = match &args.connect.connect {
         Some(endpoint) => {
             let connector = Connector::zenoh(endpoint.clone());
-            let report = tca::ping::run(&connector, args.n, args.payload)
+            let report = tca_ping::run(&connector, args.n, args.payload)
                 .await
                 .with_context(|| format!("ping through central at {endpoint}"))?;
             (report, format!("central at {endpoint} (zenoh)"))
@@ -39,7 +39,7 @@ pub(crate) async fn run(args: PingArgs) -> anyhow::Result<ExitCode> {
         None => {
             let central = tca_central::start(StartOptions::default()).await?;
             let connector = Connector::from(central.in_process());
-            let report = tca::ping::run(&connector, args.n, args.payload).await?;
+            let report = tca_ping::run(&connector, args.n, args.payload).await?;
             central.shutdown().await?;
             (report, "in-process central".to_owned())
         }

@@ -1,13 +1,13 @@
 //! `tca log replay`: a recorded walk run again with some modules played from the log
-//! (see [`tca::replay`]).
+//! (see `tca_walk::replay` and `tca_replay`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
 use clap::Args;
-use tca::replay::{ReplayOptions, replay};
-use tca::walk::{ComputeModel, TerrainChoice};
+use tca_walk::TerrainChoice;
+use tca_walk::{WalkReplayOptions, replay_walk};
 
 #[derive(Debug, Args)]
 pub(crate) struct ReplayArgs {
@@ -36,8 +36,8 @@ pub(crate) struct ReplayArgs {
     seed: u64,
     /// What the live planners' computing costs in simulated time, as in `tca walk --compute`
     /// (only the stamps depend on it, not the data compared).
-    #[arg(long, value_enum, default_value_t = ComputeModel::Paper)]
-    compute: ComputeModel,
+    #[arg(long, value_enum, default_value_t = super::Compute::Paper)]
+    compute: super::Compute,
     /// Keep the replay's own traffic log in DIR/traffic.mcap.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
@@ -65,17 +65,17 @@ pub(crate) async fn run(args: ReplayArgs) -> anyhow::Result<ExitCode> {
             }
         },
     };
-    let options = ReplayOptions {
+    let options = WalkReplayOptions {
         log: args.file,
         stand_ins: args.stand_ins,
         gait_params: args.gait_params,
         terrain,
         seed: args.seed,
-        compute: args.compute,
+        compute: args.compute.into(),
         out: args.out,
         goal_timeout: args.timeout.map(|t| Duration::from_secs(t.max(1))),
     };
-    let report = match replay(&options).await {
+    let report = match replay_walk(&options).await {
         Ok(r) => r,
         Err(e) => {
             eprintln!("error: cannot replay: {}", causes(&e));

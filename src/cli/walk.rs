@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args;
-use tca::walk::{ComputeModel, Progress, TerrainChoice, WalkOptions};
 use tca_single_leg_messages::WalkMode;
+use tca_walk::{Progress, TerrainChoice, WalkOptions};
 use tokio::sync::mpsc;
 
 #[derive(Debug, Args)]
@@ -42,8 +42,8 @@ pub(crate) struct WalkArgs {
     /// What the planners' computing costs in simulated time: "paper" (the 1990 system's
     /// times, §7.2: Gait Planner 2 s, Leg Recovery Planner 12 s a step) or "measured" (this
     /// machine's milliseconds).
-    #[arg(long, value_enum, default_value_t = ComputeModel::Paper)]
-    compute: ComputeModel,
+    #[arg(long, value_enum, default_value_t = super::Compute::Paper)]
+    compute: super::Compute,
     /// Print the summary as one JSON object on the last line of stdout.
     #[arg(long)]
     json: bool,
@@ -64,14 +64,14 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         out: args.connect.is_none().then(|| args.out.clone()),
         step_pictures: args.pictures,
         connect: args.connect.clone(),
-        compute: args.compute,
+        compute: args.compute.into(),
     };
     let (tx, rx) = mpsc::unbounded_channel();
     let display = tokio::spawn(show_progress(rx));
-    let result = tca::walk::walk(&options, tx).await;
+    let result = tca_walk::walk(&options, tx).await;
     let _ = display.await;
     let report = result?;
-    print!("{}", tca::walk::report::summary(&report));
+    print!("{}", tca_walk::report::summary(&report));
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     }

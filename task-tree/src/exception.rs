@@ -406,12 +406,12 @@ mod tests {
         let (recover, _) = b
             .tree
             .add_node(
-                NodeSpec::command("planArm", "controller")
-                    .under(step)
-                    .with(NewConstraint::Before {
+                NodeSpec::command("planArm", "controller").under(step).with(
+                    NewConstraint::Before {
                         point: crate::Point::AchievementEnd,
                         after: body.achievement_start(),
-                    }),
+                    },
+                ),
                 b.now,
             )
             .expect("patch");

@@ -2,11 +2,11 @@
 //! types, and how a simulator error is reported on the bus.
 
 use nalgebra::Point3;
+use tca_robot::{CarriagePose, JointPosition};
 use tca_single_leg_messages::{
     BodyPose, CarriagePoint, ForceReading as ForceMessage, HardwareFault, Joints, MoveFailed,
     MoveFailureKind, WorldPoint,
 };
-use tca_robot::{CarriagePose, JointPosition};
 
 use crate::sim::{FailureKind, ForceReading, SimError};
 

@@ -8,11 +8,11 @@
 
 use std::sync::{Arc, Mutex, MutexGuard};
 
+use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
 use tca_single_leg_messages::{
     BodyMove, BodyPosition, CartLegPosition, ControllerState, ControllerStatus, GlobalLegPosition,
     JointLegPosition, LegMove, ReadForce, SetTransForce,
 };
-use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
 use tokio::time::Instant;
 
 use crate::config::ControllerConfig;

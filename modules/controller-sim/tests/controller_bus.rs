@@ -9,12 +9,12 @@ use nalgebra::Point3;
 use tca_controller_sim::SpeedFactor;
 use tca_controller_sim::sim::{FaultConfig, LegSimulator};
 use tca_messages::control::TaskOutcome;
+use tca_module::Module;
+use tca_robot::JointPosition;
 use tca_single_leg_messages::{
     BodyMove, BodyPosition, CartLegPosition, ControllerStatus, GlobalLegPosition, JointLegPosition,
     Joints, LegMove, MoveFailureKind, ReadForce, SetTransForce,
 };
-use tca_module::Module;
-use tca_robot::JointPosition;
 
 fn to_joints(q: &JointPosition) -> Joints {
     Joints {

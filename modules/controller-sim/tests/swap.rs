@@ -10,12 +10,12 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use common::{Client, builtin_fast, central, within};
 use tca_messages::control::TaskOutcome;
+use tca_module::{Connector, Module, ModuleError};
 use tca_single_leg_messages::{
     BodyMove, BodyPose, BodyPosition, CarriagePoint, CartLegPosition, ControllerState,
     ControllerStatus, ForceReading, GlobalLegPosition, JointLegPosition, Joints, LegMove,
     ReadForce, SetTransForce, WorldPoint,
 };
-use tca_module::{Connector, Module, ModuleError};
 
 /// The names of every message the Controller handles.
 const CONTROLLER_MESSAGES: [&str; 9] = [

@@ -4,7 +4,7 @@
 //! terrain elevation, clear region (grey = allowed, red = eliminated) and the composite cost
 //! (scaled between its best and worst cell; red = eliminated) with the chosen cell in yellow.
 
-use tca_lrp::picture::{Canvas, Rgb, grey};
+use tca_canvas::{Canvas, Rgb, grey};
 use tca_robot::Grid;
 
 use crate::planner::StepPlan;

@@ -3,8 +3,8 @@
 
 use nalgebra::{Point2, Point3};
 use tca_lrp::TerrainMap;
-use tca_single_leg_messages::PlanePoint;
 use tca_robot::{CellIndex, ElbowBranch, Grid, LegKinematics, LegParams};
+use tca_single_leg_messages::PlanePoint;
 
 use crate::error::{GaitError, Result};
 use crate::maps::CostMaps;

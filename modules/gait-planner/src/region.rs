@@ -2,8 +2,8 @@
 //! (behind it when walking backward), and the polygons to ask the LTM Manager for.
 
 use nalgebra::Point2;
-use tca_single_leg_messages::PlanePoint;
 use tca_robot::{Grid, LegParams};
+use tca_single_leg_messages::PlanePoint;
 
 use crate::error::{GaitError, Result};
 

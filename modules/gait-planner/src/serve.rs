@@ -16,14 +16,14 @@ use std::time::Instant;
 
 use nalgebra::Point2;
 use tca_lrp::TerrainMap;
-use tca_single_leg_messages::{
-    BodyMove, BodyPosition, ElbowSide, GlobalLegPosition, LegReachability, MapKind, MapRegion,
-    PlanStep, RecoverLeg, StepPlanned, WorldPoint,
-};
 use tca_module::{
     ComputeTime, Connector, ConstraintSpec, Context, HandlerError, Module, ModuleError, TaskRef,
 };
 use tca_robot::LegParams;
+use tca_single_leg_messages::{
+    BodyMove, BodyPosition, ElbowSide, GlobalLegPosition, LegReachability, MapKind, MapRegion,
+    PlanStep, RecoverLeg, StepPlanned, WorldPoint,
+};
 
 use crate::error::GaitError;
 use crate::params::GaitParams;

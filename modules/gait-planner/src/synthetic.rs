@@ -3,8 +3,8 @@
 
 use nalgebra::{Matrix3, Point2, Vector3};
 use tca_lrp::{MapValue, TerrainMap};
-use tca_single_leg_messages::MapKind;
 use tca_robot::{CellIndex, Grid, HeightField};
+use tca_single_leg_messages::MapKind;
 
 use crate::error::{GaitError, Result};
 

@@ -20,11 +20,11 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
+use tca_messages::{MessageId, NodeId};
+use tca_module::{ConstraintSpec, Context, HandlerError, ModuleBuilder, Task, TaskRef};
 use tca_single_leg_messages::{
     HardwareFault, MoveFailed, PlanStep, StepStart, Walk, WalkMode, WorldPoint,
 };
-use tca_messages::{MessageId, NodeId};
-use tca_module::{ConstraintSpec, Context, HandlerError, ModuleBuilder, Task, TaskRef};
 
 /// What the module remembers of each walk in progress.
 #[derive(Debug, Clone)]

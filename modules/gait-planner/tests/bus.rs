@@ -15,12 +15,12 @@ use tca_controller_sim::sim::{LegSimulator, StartPose};
 use tca_gait_planner::{GaitConfig, synthetic};
 use tca_lrp::{LrpConfig, MapValue, TerrainMap};
 use tca_messages::control::TaskOutcome;
+use tca_module::{Connector, HandlerError, Module};
+use tca_robot::{Course, ElbowBranch, HeightField, JointPosition, LegParams};
 use tca_single_leg_messages::{
     BodyMove, BodyPose, BodyPosition, GlobalLegPosition, JointLegPosition, Joints, LegMove,
     MapKind, MapRegion, PlanStep, StepPlanned, WorldPoint,
 };
-use tca_module::{Connector, HandlerError, Module};
-use tca_robot::{Course, ElbowBranch, HeightField, JointPosition, LegParams};
 use tokio::sync::mpsc;
 
 const STEP: Duration = Duration::from_secs(60);

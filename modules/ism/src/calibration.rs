@@ -11,8 +11,8 @@
 //! - [`calibrate`]: the whole procedure with a virtual scanner.
 
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, UnitQuaternion, Vector3};
-use tca_single_leg_messages::RangeImage;
 use tca_robot::CarriagePose;
+use tca_single_leg_messages::RangeImage;
 
 use crate::error::{IsmError, Result};
 use crate::frames::ImageFrames;

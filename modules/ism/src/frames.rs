@@ -13,9 +13,9 @@
 //! maps coordinates in B to coordinates in A.
 
 use nalgebra::{Isometry3, Matrix3, Matrix4, Rotation3, Translation3, UnitQuaternion, Vector3};
-use tca_single_leg_messages::{BodyPose, RangeImage, Transform};
 use tca_robot::CarriagePose;
 use tca_robot::params::CarriageParams;
+use tca_single_leg_messages::{BodyPose, RangeImage, Transform};
 
 use crate::error::{IsmError, Result};
 

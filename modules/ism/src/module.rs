@@ -5,9 +5,9 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
-use tca_single_leg_messages::{AcquireImage, BodyPosition, RangeImage, SensorKind};
 use tca_module::{Connector, HandlerError, Module, ModuleError};
 use tca_robot::{HeightField, LegParams};
+use tca_single_leg_messages::{AcquireImage, BodyPosition, RangeImage, SensorKind};
 
 use crate::frames::carriage_pose;
 use crate::scanner::VirtualScanner;

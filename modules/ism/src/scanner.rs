@@ -11,9 +11,9 @@
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3, Vector3};
-use tca_single_leg_messages::RangeImage;
 use tca_robot::params::CarriageParams;
 use tca_robot::{CarriagePose, HeightField, LegParams};
+use tca_single_leg_messages::RangeImage;
 
 use crate::error::{IsmError, Result};
 use crate::frames::{body_from_global, to_wire};

@@ -1,7 +1,7 @@
 //! What the ISM asks of a sensor, real or virtual (§5.2.1).
 
-use tca_single_leg_messages::RangeImage;
 use tca_robot::CarriagePose;
+use tca_single_leg_messages::RangeImage;
 
 use crate::error::Result;
 use crate::spec::SensorSpec;

@@ -21,8 +21,8 @@ use std::fs;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use tca_single_leg_messages::{RangeImage, SensorKind, Transform};
 use tca_robot::CarriagePose;
+use tca_single_leg_messages::{RangeImage, SensorKind, Transform};
 
 use crate::error::{IsmError, Result};
 use crate::sensor::RangeSensor;

@@ -8,9 +8,9 @@ use nalgebra::Point2;
 use tca_central::StartOptions;
 use tca_ism::stored::write_sequence_image;
 use tca_ism::{ImageFrames, IsmConfig, SensorSpec, StoredSequence, VirtualScanner};
-use tca_single_leg_messages::{AcquireImage, BodyPose, BodyPosition, SensorKind};
 use tca_module::{Connector, Module};
 use tca_robot::{CarriagePose, HeightField, LegParams};
+use tca_single_leg_messages::{AcquireImage, BodyPose, BodyPosition, SensorKind};
 
 async fn within<T>(what: &str, f: impl Future<Output = T>) -> T {
     tokio::time::timeout(Duration::from_secs(60), f)

@@ -5,8 +5,8 @@ use std::borrow::Cow;
 use std::collections::VecDeque;
 
 use nalgebra::{Point2, Point3};
-use tca_single_leg_messages::{Joints, LegMove};
 use tca_robot::{CarriagePose, ElbowBranch, Grid, JointPosition, LegKinematics, LegParams};
+use tca_single_leg_messages::{Joints, LegMove};
 
 use crate::cost::MotionCost;
 use crate::cspace::{CCell, CSpace};

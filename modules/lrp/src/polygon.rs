@@ -2,8 +2,8 @@
 //! `legReachability` vocabulary): validation, bounding grid, and point inclusion.
 
 use nalgebra::Point2;
-use tca_single_leg_messages::PlanePoint;
 use tca_robot::Grid;
+use tca_single_leg_messages::PlanePoint;
 
 use crate::error::{PlanError, Result};
 

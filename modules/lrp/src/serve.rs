@@ -13,12 +13,12 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use nalgebra::{Point2, Point3};
+use tca_module::{ComputeTime, Connector, Context, HandlerError, Module, ModuleError};
+use tca_robot::{CarriagePose, JointPosition, LegKinematics, LegParams};
 use tca_single_leg_messages::{
     BodyPosition, ElbowSide, JointLegPosition, Joints, LegReachability, MapCell, MapGrid, MapKind,
     MapRegion, MoveFailed, MoveFailureKind, RecoverLeg, WorldPoint,
 };
-use tca_module::{ComputeTime, Connector, Context, HandlerError, Module, ModuleError};
-use tca_robot::{CarriagePose, JointPosition, LegKinematics, LegParams};
 
 use crate::params::LrpParams;
 use crate::picture::cspace_picture;

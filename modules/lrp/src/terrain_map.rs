@@ -8,8 +8,8 @@
 //! unknown cells (and everything off the map) at a configurable height.
 
 use nalgebra::Point2;
-use tca_single_leg_messages::{MapCell, MapGrid, MapKind};
 use tca_robot::{CellIndex, Grid, HeightField};
+use tca_single_leg_messages::{MapCell, MapGrid, MapKind};
 
 use crate::error::{PlanError, Result};
 

@@ -16,13 +16,13 @@ use tca_central::{RunningCentral, StartOptions};
 use tca_controller_sim::sim::{LegSimulator, StartPose};
 use tca_lrp::{LrpConfig, MapValue, TerrainMap};
 use tca_messages::control::TaskOutcome;
+use tca_module::{Connector, HandlerError, Module};
+use tca_robot::{Course, ElbowBranch, HeightField, JointPosition, LegParams};
 use tca_single_leg_messages::{
     BodyPose, BodyPosition, GlobalLegPosition, JointLegPosition, Joints, LegMove, LegReachability,
     MapCell, MapGrid, MapKind, MapRegion, MoveFailed, MoveFailureKind, PlanePoint, RecoverLeg,
     WorldPoint,
 };
-use tca_module::{Connector, HandlerError, Module};
-use tca_robot::{Course, ElbowBranch, HeightField, JointPosition, LegParams};
 use tokio::sync::mpsc;
 
 const STEP: Duration = Duration::from_secs(30);

@@ -10,8 +10,8 @@ use std::sync::Arc;
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use tca_ism::{SensorSpec, VirtualScanner};
 use tca_ltm::{BuilderConfig, Cell, LtmConfig, Patch, TerrainMap, build_map};
-use tca_single_leg_messages::{MapKind, MapRegion, PlanePoint, RangeImage};
 use tca_robot::{CarriagePose, Course, HeightField, LegParams};
+use tca_single_leg_messages::{MapKind, MapRegion, PlanePoint, RangeImage};
 
 fn course3() -> Arc<HeightField> {
     Arc::new(

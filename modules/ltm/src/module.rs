@@ -9,8 +9,8 @@
 
 use std::sync::{Arc, Mutex};
 
-use tca_single_leg_messages::{AcquireImage, MapGrid, MapRegion};
 use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
+use tca_single_leg_messages::{AcquireImage, MapGrid, MapRegion};
 
 use crate::manager::{LtmConfig, TerrainMap};
 

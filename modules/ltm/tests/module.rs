@@ -12,8 +12,8 @@ use common::{BOX, params, rect, terrain};
 use tca_central::StartOptions;
 use tca_ism::{IsmConfig, SensorSpec, VirtualScanner};
 use tca_ltm::LtmConfig;
-use tca_single_leg_messages::{BodyPose, BodyPosition, MapCell, MapKind, MapRegion};
 use tca_module::{Connector, Module};
+use tca_single_leg_messages::{BodyPose, BodyPosition, MapCell, MapKind, MapRegion};
 
 async fn within<T>(what: &str, f: impl Future<Output = T>) -> T {
     tokio::time::timeout(Duration::from_secs(60), f)

@@ -10,9 +10,9 @@ use std::sync::Arc;
 use criterion::{Criterion, criterion_group, criterion_main};
 use tca_ism::{SensorSpec, VirtualScanner};
 use tca_ltm::{LtmConfig, TerrainMap};
-use tca_single_leg_messages::{MapGrid, MapKind, MapRegion, Overlay, PlanePoint, WorldPoint};
 use tca_pdm::{RenderOptions, render, render_png};
 use tca_robot::{CarriagePose, Course, LegParams};
+use tca_single_leg_messages::{MapGrid, MapKind, MapRegion, Overlay, PlanePoint, WorldPoint};
 
 fn pit_map(kind: MapKind) -> MapGrid {
     let terrain = Arc::new(

@@ -7,9 +7,9 @@ use std::sync::Arc;
 
 use tca_ism::{SensorSpec, VirtualScanner};
 use tca_ltm::{LtmConfig, TerrainMap};
-use tca_single_leg_messages::{MapKind, MapRegion, Overlay, PlanePoint, WorldPoint};
 use tca_pdm::{RenderOptions, write_png};
 use tca_robot::{CarriagePose, Course, LegParams};
+use tca_single_leg_messages::{MapKind, MapRegion, Overlay, PlanePoint, WorldPoint};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);

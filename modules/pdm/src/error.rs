@@ -1,7 +1,5 @@
 //! Errors of the Perception Display Manager.
 
-use std::path::PathBuf;
-
 /// What can go wrong drawing a map.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -28,14 +26,9 @@ pub enum PdmError {
     /// PNG encoding failed.
     #[error("PNG encoding failed: {0}")]
     Encode(String),
-    /// Writing the file failed.
-    #[error("cannot write {path}: {source}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// The I/O error.
-        source: std::io::Error,
-    },
+    /// The picture could not be encoded or written.
+    #[error(transparent)]
+    Picture(#[from] tca_canvas::CanvasError),
 }
 
 /// Result alias of this crate.

@@ -5,22 +5,17 @@
 //! # Layout
 //!
 //! - [`render`](mod@render): a [`MapGrid`](tca_single_leg_messages::MapGrid) and its overlays -> a
-//!   [`Picture`]: colour ramp, unknown/occluded patterns, colour scale, distance scale bar,
-//!   extent, overlays; [`render_png`] and [`write_png`].
-//! - [`canvas`]: the RGB [`Picture`], drawing primitives and PNG encoding.
+//!   [`Canvas`](tca_canvas::Canvas): colour ramp, unknown/occluded patterns, colour scale,
+//!   distance scale bar, extent, overlays; [`render_png`] and [`write_png`].
 //! - [`module`]: the PDM on the bus: [`connect`] with a [`PdmConfig`] handles `renderMap`,
 //!   asking the LTM Manager for `mapRegion`; [`render_map`] does the same for command-line
 //!   tools.
-//! - `font`: the 5 x 7 bitmap font of the labels.
 //! - [`error`]: [`PdmError`] and the [`Result`] alias.
 
-pub mod canvas;
 pub mod error;
-mod font;
 pub mod module;
 pub mod render;
 
-pub use canvas::{Picture, Rgb};
 pub use error::{PdmError, Result};
 pub use module::{PdmConfig, connect, render_map};
 pub use render::{MapLayout, RenderOptions, render, render_png, write_png};

@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use tca_single_leg_messages::RenderMap;
 use tca_module::{Connector, HandlerError, Module, ModuleError};
+use tca_single_leg_messages::RenderMap;
 
 use crate::error::{PdmError, Result};
 use crate::render::{RenderOptions, write_png};

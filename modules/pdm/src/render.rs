@@ -10,9 +10,8 @@ use std::path::Path;
 
 use tca_single_leg_messages::{MapCell, MapGrid, MapKind, Overlay, WorldPoint};
 
-use crate::canvas::{Picture, Rgb};
 use crate::error::{PdmError, Result};
-use crate::font;
+use tca_canvas::{Canvas, Rgb, font};
 
 /// Largest number of cells drawn along a side.
 pub const MAX_CELLS_PER_SIDE: u32 = 4096;
@@ -277,7 +276,7 @@ impl MapLayout {
 }
 
 /// Draws a map grid with overlays.
-pub fn render(grid: &MapGrid, overlays: &[Overlay], options: &RenderOptions) -> Result<Picture> {
+pub fn render(grid: &MapGrid, overlays: &[Overlay], options: &RenderOptions) -> Result<Canvas> {
     let area = MapLayout::of(grid, options)?;
     let (nx, ny) = (area.grid_nx, area.grid_ny);
     let cell_px = area.cell_px;
@@ -325,7 +324,7 @@ pub fn render(grid: &MapGrid, overlays: &[Overlay], options: &RenderOptions) -> 
     let below_map = area.y + area.height() + 12 + 40;
     let below_legend = area.y + bar_h + 20 + 2 * 22;
     let height = below_map.max(below_legend) + M;
-    let mut pic = Picture::new(width as u32, height as u32, BACKGROUND);
+    let mut pic = Canvas::new(width as u32, height as u32, BACKGROUND);
 
     pic.text(M, M, &title, 2, INK);
     // Cells, north up.
@@ -420,7 +419,7 @@ pub fn render(grid: &MapGrid, overlays: &[Overlay], options: &RenderOptions) -> 
     Ok(pic)
 }
 
-fn draw_overlays(pic: &mut Picture, area: &MapLayout, overlays: &[Overlay]) {
+fn draw_overlays(pic: &mut Canvas, area: &MapLayout, overlays: &[Overlay]) {
     let halo = [255, 255, 255];
     for overlay in overlays {
         match overlay {
@@ -469,7 +468,7 @@ pub fn render_png(
     overlays: &[Overlay],
     options: &RenderOptions,
 ) -> Result<Vec<u8>> {
-    render(grid, overlays, options)?.to_png()
+    Ok(render(grid, overlays, options)?.to_png()?)
 }
 
 /// Draws a map grid with overlays into a PNG file.
@@ -479,7 +478,7 @@ pub fn write_png(
     overlays: &[Overlay],
     options: &RenderOptions,
 ) -> Result<()> {
-    render(grid, overlays, options)?.write_png(path)
+    Ok(render(grid, overlays, options)?.write_png(path)?)
 }
 
 #[cfg(test)]

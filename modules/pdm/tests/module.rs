@@ -10,12 +10,12 @@ use tca_central::StartOptions;
 use tca_ism::{IsmConfig, SensorSpec, VirtualScanner};
 use tca_ltm::LtmConfig;
 use tca_messages::control::TaskOutcome;
-use tca_single_leg_messages::{
-    BodyPose, BodyPosition, MapKind, MapRegion, Overlay, PlanePoint, RenderMap, WorldPoint,
-};
 use tca_module::{Connector, Module};
 use tca_pdm::{PdmConfig, RenderOptions, render_map};
 use tca_robot::{HeightField, LegParams};
+use tca_single_leg_messages::{
+    BodyPose, BodyPosition, MapKind, MapRegion, Overlay, PlanePoint, RenderMap, WorldPoint,
+};
 
 async fn within<T>(what: &str, f: impl Future<Output = T>) -> T {
     tokio::time::timeout(Duration::from_secs(60), f)

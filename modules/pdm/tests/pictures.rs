@@ -6,12 +6,12 @@ use std::sync::Arc;
 use nalgebra::Point2;
 use tca_ism::{SensorSpec, VirtualScanner};
 use tca_ltm::{LtmConfig, TerrainMap};
-use tca_single_leg_messages::{
-    MapCell, MapGrid, MapKind, MapRegion, Overlay, PlanePoint, WorldPoint,
-};
 use tca_pdm::render::{OCCLUDED_COLOURS, OVERLAY, UNKNOWN_COLOURS, ramp};
 use tca_pdm::{MapLayout, PdmError, RenderOptions, render, write_png};
 use tca_robot::{CarriagePose, HeightField, LegParams};
+use tca_single_leg_messages::{
+    MapCell, MapGrid, MapKind, MapRegion, Overlay, PlanePoint, WorldPoint,
+};
 
 /// A 10 x 10 grid: values rising with x in the lower half, unknown top-left quarter, occluded
 /// top-right quarter.
@@ -238,5 +238,8 @@ fn a_real_map_of_a_box_is_written_as_png() {
     );
     // An unwritable path is a clear error.
     let e = write_png(dir.path().join("no/such/dir/x.png"), &g, &[], &options).unwrap_err();
-    assert!(matches!(e, PdmError::Io { .. }), "{e}");
+    assert!(
+        matches!(e, PdmError::Picture(tca_canvas::CanvasError::Write { .. })),
+        "{e}"
+    );
 }

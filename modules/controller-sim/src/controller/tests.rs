@@ -2,8 +2,8 @@
 //! clock, and what queries see during a move. Wall-clock instants are given, never waited.
 
 use nalgebra::{Point2, Point3};
-use tca_single_leg_messages::MoveFailureKind;
 use tca_robot::{CarriagePose, ElbowBranch, HeightField, LegKinematics, LegParams};
+use tca_single_leg_messages::MoveFailureKind;
 
 use super::*;
 use crate::sim::{FaultConfig, StartPose};

@@ -14,9 +14,9 @@ use tca_controller_sim::sim::StartPose;
 use tca_controller_sim::{ControllerConfig, SpeedFactor};
 use tca_messages::NodeId;
 use tca_messages::control::TaskOutcome;
-use tca_single_leg_messages::{BodyMove, HardwareFault, LegMove, MoveFailed, SetTransForce};
 use tca_module::{Connector, HandlerError, Module};
 use tca_robot::{CarriagePose, ElbowBranch, HeightField, LegKinematics, LegParams};
+use tca_single_leg_messages::{BodyMove, HardwareFault, LegMove, MoveFailed, SetTransForce};
 use tokio::sync::mpsc;
 
 /// Every await in a test is bounded by this.

@@ -6,8 +6,8 @@ use std::sync::Arc;
 
 use nalgebra::Point2;
 use tca_ism::{NoiseModel, SensorSpec, VirtualScanner};
-use tca_single_leg_messages::{PlanePoint, RangeImage};
 use tca_robot::{CarriagePose, HeightField, LegParams};
+use tca_single_leg_messages::{PlanePoint, RangeImage};
 
 /// Sample spacing of the test terrains, metres.
 pub(crate) const TERRAIN_RES_M: f64 = 0.02;

@@ -1,0 +1,441 @@
+//! Walks with the walking modules as separate processes over zenoh while modules are killed
+//! (`SIGKILL`) at random moments and started again (`tca chaos`; §3.1: modules restart without
+//! bringing down the rest).
+//!
+//! Central runs in this process, listening on loopback and logging all traffic. For each walk
+//! the six walking modules start as `tca module NAME --state DIR` processes (a fresh state
+//! directory per walk: the Controller's leg and the LTM Manager's map survive their restarts
+//! in it); the walk is driven as by `tca walk --connect`. During the walk, after a randomly
+//! chosen step and a random delay, a randomly chosen module is killed; once central has seen
+//! its link close, it is started again. Every walk must reach its goal without a collision;
+//! at the end the log is audited ([`tca_logs::audit`]): no message lost, none handled twice.
+//!
+//! - [`processes`]: the module processes.
+
+pub mod processes;
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use anyhow::Context as _;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use tca_central::StartOptions;
+use tca_logs::Audit;
+use tca_module::{Connector, Module};
+use tokio::sync::mpsc;
+
+use processes::{ModuleProcess, ProcessSetup};
+use tca_walk::{ComputeModel, Progress, TerrainChoice, WALKING_MODULES, WalkOptions};
+
+/// What to run.
+#[derive(Clone, Debug)]
+pub struct ChaosOptions {
+    /// Walks to complete.
+    pub walks: usize,
+    /// Module kills to make across the walks (spread evenly; at least this many are made,
+    /// more walks run if some kills found their walk already over).
+    pub kills: usize,
+    /// The terrain (course 3 by default).
+    pub terrain: TerrainChoice,
+    /// `--course N` or `--terrain FILE` as the module processes are given it.
+    pub terrain_args: Vec<String>,
+    /// Seed of the kills' choices and of the scanner noise.
+    pub seed: u64,
+    /// The Controller's speed factor (None: as fast as it computes).
+    pub speed: Option<f64>,
+    /// What the planners charge to simulated time.
+    pub compute: ComputeModel,
+    /// Where the log and the modules' state go.
+    pub out: PathBuf,
+    /// Central's zenoh endpoint (a free loopback port if `None`).
+    pub listen: Option<String>,
+    /// The `tca` executable to start modules with.
+    pub exe: PathBuf,
+    /// The modules that may be killed (all six walking modules if empty).
+    pub victims: Vec<String>,
+    /// Plan the next step while the current one executes.
+    pub concurrent: bool,
+}
+
+/// One kill.
+#[derive(Clone, Debug, Serialize)]
+pub struct KillRecord {
+    /// Which walk (from 0).
+    pub walk: usize,
+    /// The module killed.
+    pub module: String,
+    /// Steps planned in that walk before the kill.
+    pub after_step: usize,
+    /// Milliseconds after that step's report.
+    pub delay_ms: u64,
+    /// Milliseconds from the kill until the new process was started.
+    pub restarted_after_ms: u64,
+}
+
+/// One walk.
+#[derive(Clone, Debug, Serialize)]
+pub struct WalkRecord {
+    /// Which walk (from 0).
+    pub walk: usize,
+    /// The carriage reached the goal.
+    pub reached: bool,
+    /// Times the leg struck terrain.
+    pub collisions: u32,
+    /// Steps the walk reported (a restarted Gait Planner numbers its steps afresh).
+    pub steps: usize,
+    /// Kills during this walk.
+    pub kills: usize,
+    /// Simulated seconds.
+    pub sim_time_s: f64,
+    /// Wall-clock seconds.
+    pub wall_time_s: f64,
+    /// Why not reached, if not.
+    pub reason: Option<String>,
+}
+
+/// What happened.
+#[derive(Clone, Debug, Serialize)]
+pub struct ChaosReport {
+    /// The walks.
+    pub walks: Vec<WalkRecord>,
+    /// The kills.
+    pub kills: Vec<KillRecord>,
+    /// The log's audit.
+    pub audit: Audit,
+    /// The log.
+    pub log: PathBuf,
+    /// Every walk reached its goal with no collision, the kills were made and the audit is
+    /// clean.
+    pub passed: bool,
+    /// Wall-clock seconds of the whole run.
+    pub wall_time_s: f64,
+}
+
+/// Steps after which a kill may be made (a walk on course 3 plans 6 or more).
+const KILL_WINDOW_STEPS: usize = 5;
+
+/// Runs the chaos walks. `say` gets one line per event for a display.
+pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result<ChaosReport> {
+    let started = Instant::now();
+    if options.walks == 0 {
+        anyhow::bail!("--walks must be at least 1");
+    }
+    if let Some(v) = options
+        .victims
+        .iter()
+        .find(|v| !WALKING_MODULES.contains(&v.as_str()))
+    {
+        anyhow::bail!(
+            "{v:?} is not a walking module; the modules that can be killed are {}",
+            WALKING_MODULES.join(", ")
+        );
+    }
+    std::fs::create_dir_all(&options.out)
+        .with_context(|| format!("cannot create {}", options.out.display()))?;
+    let log = options.out.join("traffic.mcap");
+    tca_logs::set_aside(&log).context("cannot keep the previous log")?;
+    let endpoint = match &options.listen {
+        Some(e) => e.clone(),
+        None => format!("tcp/127.0.0.1:{}", free_port()?),
+    };
+    let central = tca_central::start(StartOptions {
+        log: Some(log.clone()),
+        listen: vec![endpoint.clone()],
+        ..StartOptions::default()
+    })
+    .await
+    .context("cannot start central")?;
+    let watcher = Module::builder(format!("chaos-{}", std::process::id()))
+        .connect(&Connector::from(central.in_process()))
+        .await
+        .context("cannot watch central")?;
+    let setup = ProcessSetup {
+        exe: options.exe.clone(),
+        endpoint: endpoint.clone(),
+        terrain_args: options.terrain_args.clone(),
+        seed: options.seed,
+        speed: options.speed,
+        compute: match options.compute {
+            ComputeModel::Paper => "paper",
+            ComputeModel::Measured => "measured",
+        },
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(options.seed);
+    let per_walk = options.kills.div_ceil(options.walks);
+    let mut walks = Vec::new();
+    let mut kills = Vec::new();
+    let mut w = 0;
+    // Extra walks (at most as many again) make up for kills that found their walk over.
+    while w < options.walks || (kills.len() < options.kills && w < 2 * options.walks) {
+        let wanted = per_walk.min(options.kills.saturating_sub(kills.len()));
+        let (record, made) = one_walk(
+            w, wanted, options, &setup, &watcher, &endpoint, &mut rng, &say,
+        )
+        .await?;
+        say(format!(
+            "walk {w}: {} with {} collision(s), {} step(s), {} kill(s), {:.1} s simulated, {:.1} s wall{}",
+            if record.reached {
+                "reached"
+            } else {
+                "NOT reached"
+            },
+            record.collisions,
+            record.steps,
+            record.kills,
+            record.sim_time_s,
+            record.wall_time_s,
+            record
+                .reason
+                .as_ref()
+                .map(|r| format!(": {r}"))
+                .unwrap_or_default()
+        ));
+        walks.push(record);
+        kills.extend(made);
+        w += 1;
+    }
+    watcher.close().await;
+    central.shutdown().await.context("central did not stop")?;
+    let audit = tca_logs::audit(
+        &tca_logs::LogFile::open(&log)
+            .with_context(|| format!("cannot read the log {}", log.display()))?,
+    );
+    let passed = walks.iter().all(|w| w.reached && w.collisions == 0)
+        && kills.len() >= options.kills
+        && audit.is_clean();
+    Ok(ChaosReport {
+        walks,
+        kills,
+        audit,
+        log,
+        passed,
+        wall_time_s: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// Walks once with fresh module processes, making up to `wanted` kills.
+#[allow(clippy::too_many_arguments)]
+async fn one_walk(
+    w: usize,
+    wanted: usize,
+    options: &ChaosOptions,
+    setup: &ProcessSetup,
+    watcher: &Module,
+    endpoint: &str,
+    rng: &mut ChaCha8Rng,
+    say: &impl Fn(String),
+) -> anyhow::Result<(WalkRecord, Vec<KillRecord>)> {
+    let started = Instant::now();
+    let state = options.out.join("state").join(format!("walk-{w}"));
+    if state.exists() {
+        std::fs::remove_dir_all(&state)
+            .with_context(|| format!("cannot clear {}", state.display()))?;
+    }
+    let mut modules = Vec::new();
+    for name in WALKING_MODULES {
+        modules.push(ModuleProcess::start(setup, name, &state)?);
+    }
+    wait_until(watcher, Duration::from_secs(30), |registry| {
+        WALKING_MODULES.iter().all(|m| {
+            registry.modules.iter().any(|c| c.as_str() == *m)
+                && registry
+                    .entries
+                    .iter()
+                    .any(|e| e.handler.as_str() == *m && e.connected)
+        })
+    })
+    .await
+    .context("the walking modules did not all register within 30 s")?;
+
+    // When to kill: after which step, how long after it, which module.
+    let victims: Vec<usize> = (0..WALKING_MODULES.len())
+        .filter(|i| {
+            options.victims.is_empty() || options.victims.iter().any(|v| v == WALKING_MODULES[*i])
+        })
+        .collect();
+    let mut plan: Vec<(usize, u64, usize)> = (0..wanted)
+        .map(|_| {
+            (
+                rng.random_range(0..=KILL_WINDOW_STEPS),
+                rng.random_range(0..=40u64),
+                victims[rng.random_range(0..victims.len())],
+            )
+        })
+        .collect();
+    plan.sort();
+    let walk_options = WalkOptions {
+        terrain: options.terrain.clone(),
+        goal_y_m: None,
+        backward: false,
+        mode: if options.concurrent {
+            tca_single_leg_messages::WalkMode::Concurrent
+        } else {
+            tca_single_leg_messages::WalkMode::Sequential
+        },
+        seed: options.seed,
+        out: None,
+        step_pictures: false,
+        connect: Some(endpoint.to_owned()),
+        compute: options.compute,
+    };
+    let (tx, mut rx) = mpsc::unbounded_channel();
+    let mut walk = tokio::spawn(async move { tca_walk::walk(&walk_options, tx).await });
+    let mut steps = 0usize;
+    let mut made = Vec::new();
+    let result = loop {
+        tokio::select! {
+            r = &mut walk => break r.context("the walk task failed")?,
+            p = rx.recv() => {
+                match p {
+                    Some(Progress::Step(_)) => steps += 1,
+                    Some(Progress::Leg { .. }) => {}
+                    None => break walk.await.context("the walk task failed")?,
+                }
+                while let Some(&(after, delay, which)) = plan.first() {
+                    if after > steps {
+                        break;
+                    }
+                    plan.remove(0);
+                    tokio::time::sleep(Duration::from_millis(delay)).await;
+                    if walk.is_finished() {
+                        break;
+                    }
+                    let kill = kill_and_restart(&mut modules[which], watcher).await?;
+                    say(format!(
+                        "walk {w}: killed {} after step {steps} (+{delay} ms), started again after {} ms",
+                        modules[which].name, kill
+                    ));
+                    made.push(KillRecord {
+                        walk: w,
+                        module: modules[which].name.clone(),
+                        after_step: steps,
+                        delay_ms: delay,
+                        restarted_after_ms: kill,
+                    });
+                }
+            }
+        }
+    };
+    for m in &mut modules {
+        m.stop().await;
+    }
+    let record = match result {
+        Ok(report) => WalkRecord {
+            walk: w,
+            reached: report.reached,
+            collisions: report.collisions,
+            steps: report.steps,
+            kills: made.len(),
+            sim_time_s: report.sim_time_s,
+            wall_time_s: started.elapsed().as_secs_f64(),
+            reason: report.reason,
+        },
+        Err(e) => WalkRecord {
+            walk: w,
+            reached: false,
+            collisions: 0,
+            steps,
+            kills: made.len(),
+            sim_time_s: 0.0,
+            wall_time_s: started.elapsed().as_secs_f64(),
+            reason: Some(format!("{e:#}")),
+        },
+    };
+    Ok((record, made))
+}
+
+/// Kills a module, waits until central has seen its link close, and starts it again; returns
+/// the milliseconds between kill and restart.
+async fn kill_and_restart(module: &mut ModuleProcess, watcher: &Module) -> anyhow::Result<u64> {
+    let killed = Instant::now();
+    module.kill().await;
+    let name = module.name.clone();
+    wait_until(watcher, Duration::from_secs(10), |registry| {
+        !registry.modules.iter().any(|c| c.as_str() == name)
+    })
+    .await
+    .with_context(|| format!("central did not notice that {name} died"))?;
+    module.restart()?;
+    Ok(killed.elapsed().as_millis() as u64)
+}
+
+/// Polls central's registry until `ok` holds for it.
+async fn wait_until(
+    watcher: &Module,
+    limit: Duration,
+    ok: impl Fn(&tca_messages::control::Registry) -> bool,
+) -> anyhow::Result<()> {
+    let deadline = Instant::now() + limit;
+    loop {
+        let registry = watcher.registry().await?;
+        if ok(&registry) {
+            return Ok(());
+        }
+        if Instant::now() > deadline {
+            let connected: Vec<String> = registry.modules.iter().map(|m| m.to_string()).collect();
+            anyhow::bail!("timed out; connected now: {}", connected.join(", "));
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+}
+
+fn free_port() -> anyhow::Result<u16> {
+    Ok(std::net::TcpListener::bind("127.0.0.1:0")?
+        .local_addr()?
+        .port())
+}
+
+/// A readable summary of an audit.
+pub fn audit_text(audit: &Audit) -> String {
+    let mut s = format!(
+        "{} queries, {} goals and commands, {} informs, {} exceptions; {} refused with an error; \
+         {} tasks delivered again after their module went down ({} links closed)\n",
+        audit.queries,
+        audit.tasks,
+        audit.informs,
+        audit.exceptions,
+        audit.refused,
+        audit.redelivered,
+        audit.links_closed
+    );
+    if audit.is_clean() {
+        s.push_str("no message lost, none handled twice\n");
+    }
+    for l in &audit.lost {
+        s.push_str(&format!("LOST: {l}\n"));
+    }
+    for d in &audit.handled_twice {
+        s.push_str(&format!("HANDLED TWICE: {d}\n"));
+    }
+    s
+}
+
+/// A readable summary of a chaos run.
+pub fn summary(report: &ChaosReport) -> String {
+    let reached = report.walks.iter().filter(|w| w.reached).count();
+    let collisions: u32 = report.walks.iter().map(|w| w.collisions).sum();
+    let mut by_module = std::collections::BTreeMap::new();
+    for k in &report.kills {
+        *by_module.entry(k.module.as_str()).or_insert(0) += 1;
+    }
+    let mut s = format!(
+        "{} walks, {reached} reached their goal, {collisions} collisions; {} kills ({}); {:.1} s\n",
+        report.walks.len(),
+        report.kills.len(),
+        by_module
+            .iter()
+            .map(|(m, n)| format!("{m} {n}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        report.wall_time_s
+    );
+    s.push_str(&audit_text(&report.audit));
+    s.push_str(&format!(
+        "log: {}\n{}\n",
+        report.log.display(),
+        if report.passed { "PASSED" } else { "FAILED" }
+    ));
+    s
+}
