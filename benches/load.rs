@@ -14,7 +14,7 @@ use std::time::Duration;
 
 use anyhow::Context as _;
 use tca_central::CentralConfig;
-use tca_load::{LoadOptions, Transport};
+use tca_load::{LoadOptions, TransportKind};
 
 /// The allocator the `tca` command uses, so that what is measured here is what it runs.
 #[global_allocator]
@@ -58,8 +58,8 @@ fn main() -> anyhow::Result<ExitCode> {
     let mut ok = true;
     for word in transports.split(',') {
         let transport = match word.trim() {
-            "inproc" => Transport::InProcess,
-            "zenoh" => Transport::Zenoh,
+            "inproc" => TransportKind::InProcess,
+            "zenoh" => TransportKind::Zenoh,
             other => anyhow::bail!("LOAD_TRANSPORTS: unknown transport {other:?} (inproc, zenoh)"),
         };
         let options = LoadOptions {

@@ -6,7 +6,7 @@
 
 use std::time::Duration;
 
-use tca_load::{LoadOptions, Transport};
+use tca_load::{LoadOptions, TransportKind};
 
 /// Far above what 100 modules need (about 100 MiB), far below what unbounded queues take.
 const PEAK_RSS_LIMIT_KIB: u64 = 1 << 20;
@@ -18,7 +18,7 @@ fn a_hundred_modules_lose_nothing_and_central_stays_bounded() {
         .enable_all()
         .build()
         .unwrap();
-    for transport in [Transport::InProcess, Transport::Zenoh] {
+    for transport in [TransportKind::InProcess, TransportKind::Zenoh] {
         let options = LoadOptions {
             modules: 100,
             duration: Duration::from_secs(2),

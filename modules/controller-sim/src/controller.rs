@@ -51,7 +51,7 @@ pub struct SavedController {
 
 /// Why a command ended with failure.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Failure {
+pub struct CommandFailure {
     /// The reason sent back as the command's failure.
     pub reason: String,
     /// The exception to raise in the command's context (none for a refused
@@ -68,7 +68,7 @@ pub struct CommandRun {
     /// Simulated time the move took.
     pub simulated: Duration,
     /// How it ends.
-    pub outcome: std::result::Result<(), Failure>,
+    pub outcome: std::result::Result<(), CommandFailure>,
 }
 
 /// A move playing out in wall-clock time.
@@ -284,10 +284,13 @@ impl Controller {
     /// `setTransForce` at `now` (instantaneous).
     pub fn set_trans_force(&mut self, force_n: f64, now: Instant) -> CommandRun {
         self.begin(now);
-        let outcome = self.sim.set_trans_force(force_n).map_err(|e| Failure {
-            reason: format!("setTransForce: {e}"),
-            exception: None,
-        });
+        let outcome = self
+            .sim
+            .set_trans_force(force_n)
+            .map_err(|e| CommandFailure {
+                reason: format!("setTransForce: {e}"),
+                exception: None,
+            });
         self.idle_since = now;
         CommandRun {
             wall: Duration::ZERO,
@@ -343,7 +346,7 @@ impl Controller {
         }
         let outcome = result.map_err(|error| {
             let foot = self.sim.global_leg_position();
-            Failure {
+            CommandFailure {
                 reason: format!("{command}: {error}"),
                 exception: Some(exception_for(command, &error, &foot)),
             }

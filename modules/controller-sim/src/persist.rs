@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use tca_messages::MessageId;
 
-use crate::controller::{Failure, SavedController};
+use crate::controller::{CommandFailure, SavedController};
 
 /// Magic bytes at the start of a state file.
 pub const MAGIC: &[u8; 8] = b"TCACTRL1";
@@ -35,7 +35,7 @@ pub struct StateFile {
     /// The Controller.
     pub controller: SavedController,
     /// The latest commands carried out, oldest first: message id and outcome.
-    pub done: VecDeque<(u64, Result<(), Failure>)>,
+    pub done: VecDeque<(u64, Result<(), CommandFailure>)>,
 }
 
 /// Errors reading or writing a state file.
@@ -67,7 +67,7 @@ pub enum StateError {
 #[derive(Debug)]
 pub struct Persistence {
     path: PathBuf,
-    done: VecDeque<(u64, Result<(), Failure>)>,
+    done: VecDeque<(u64, Result<(), CommandFailure>)>,
 }
 
 impl Persistence {
@@ -104,7 +104,7 @@ impl Persistence {
     }
 
     /// The outcome of command `id`, if this Controller (or the one before it) carried it out.
-    pub fn outcome_of(&self, id: MessageId) -> Option<&Result<(), Failure>> {
+    pub fn outcome_of(&self, id: MessageId) -> Option<&Result<(), CommandFailure>> {
         self.done
             .iter()
             .rev()
@@ -117,7 +117,7 @@ impl Persistence {
     pub fn record(
         &mut self,
         id: MessageId,
-        outcome: &Result<(), Failure>,
+        outcome: &Result<(), CommandFailure>,
         controller: SavedController,
     ) -> Result<(), StateError> {
         self.done.push_back((id.0, outcome.clone()));

@@ -16,7 +16,7 @@ use tca_single_leg_messages::{
 use tokio::time::Instant;
 
 use crate::config::ControllerConfig;
-use crate::controller::{CommandRun, Controller, Failure, Snapshot};
+use crate::controller::{CommandFailure, CommandRun, Controller, Snapshot};
 use crate::convert::{
     Raised, body_pose_to_message, carriage_point_to_message, force_to_message, joints_from_message,
     joints_to_message, world_point_to_message,
@@ -221,7 +221,7 @@ impl Shared {
     }
 
     /// The outcome of this command if a Controller carried it out already.
-    fn already_done(&self, ctx: &Context) -> Option<Result<(), Failure>> {
+    fn already_done(&self, ctx: &Context) -> Option<Result<(), CommandFailure>> {
         if ctx.redelivery() == 0 {
             return None;
         }
@@ -231,7 +231,7 @@ impl Shared {
     }
 
     /// Ends a command: raises a failure's exception in its context, then fails.
-    fn end(&self, ctx: &Context, outcome: Result<(), Failure>) -> Result<(), HandlerError> {
+    fn end(&self, ctx: &Context, outcome: Result<(), CommandFailure>) -> Result<(), HandlerError> {
         let Err(failure) = outcome else {
             return Ok(());
         };

@@ -7,7 +7,7 @@
 
 use nalgebra::{Point2, Point3};
 use tca_gait_planner::{GaitMaps, GaitParams, GaitPlanner, synthetic};
-use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainMap};
+use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainGrid};
 use tca_robot::{CarriagePose, Course, ElbowBranch, LegKinematics, LegParams};
 
 type AnyResult<T> = Result<T, Box<dyn std::error::Error>>;
@@ -44,7 +44,7 @@ fn main() -> AnyResult<()> {
         );
         let footfall = synthetic::footfall_map(&terrain, lo, hi, 0.1, 0.15)?;
         let elevation = synthetic::elevation_map(&terrain, lo, hi, 0.1)?;
-        let lrp_map = TerrainMap::elevation_from_height_field(
+        let lrp_map = TerrainGrid::elevation_from_height_field(
             &terrain,
             Point2::new(0.0, body_y - 2.9),
             Point2::new(6.0, body_y + 2.9),

@@ -25,7 +25,7 @@
 //!
 //! - [`params`]: [`GaitParams`], the weights and constraints of `params/gait.toml`
 //!   (embedded as the default, loadable; errors name the key).
-//! - [`region`]: [`Region`], the cost maps' grid for a step, and [`Direction`].
+//! - [`region`]: [`StepRegion`], the cost maps' grid for a step, and [`WalkDirection`].
 //! - `maps`: one file per cost map: footfall, filtered footfall and the clear region
 //!   (`footfall`), body advance (`advance`), scanner visibility (`visibility`), terrain
 //!   elevation (`elevation`); [`CostMaps`] holds them all.
@@ -58,5 +58,5 @@ pub use error::{GaitError, Result};
 pub use maps::CostMaps;
 pub use params::GaitParams;
 pub use planner::{GaitMaps, GaitPlanner, StepPlan};
-pub use region::{Direction, Region};
+pub use region::{StepRegion, WalkDirection};
 pub use serve::{DEFAULT_MODULE_NAME, GaitConfig, connect};

@@ -2,7 +2,7 @@
 //! chooses the footfall and the body move (§6.2.1).
 
 use nalgebra::{Point2, Point3};
-use tca_lrp::TerrainMap;
+use tca_lrp::TerrainGrid;
 use tca_robot::{CellIndex, ElbowBranch, Grid, LegKinematics, LegParams};
 use tca_single_leg_messages::PlanePoint;
 
@@ -13,7 +13,7 @@ use crate::maps::elevation::{elevation_ok, ground_map};
 use crate::maps::footfall::{Padded, clear_region, filtered_footfall, footfall_cost};
 use crate::maps::visibility::visibility_map;
 use crate::params::GaitParams;
-use crate::region::{Direction, Region};
+use crate::region::{StepRegion, WalkDirection};
 
 /// The carriage counts as at the goal within this distance, metres.
 /// A carriage closer than this to the goal is at the goal, metres.
@@ -25,9 +25,9 @@ const MIN_ADVANCE_M: f64 = 0.05;
 pub struct GaitMaps<'a> {
     /// The LTM Manager's footfall statistic (metres of deviation from a plane under the
     /// foot) over [`GaitPlanner::map_polygon`].
-    pub footfall: &'a TerrainMap,
+    pub footfall: &'a TerrainGrid,
     /// The LTM Manager's elevation map over the same polygon.
-    pub elevation: &'a TerrainMap,
+    pub elevation: &'a TerrainGrid,
     /// The Leg Recovery Planner's reachability: whether the foot can be brought above a
     /// world point from where it is.
     pub reachable: &'a dyn Fn(Point2<f64>) -> bool,
@@ -50,7 +50,7 @@ pub struct StepPlan {
     /// The chosen cell of the region's grid.
     pub cell: CellIndex,
     /// The planning region.
-    pub region: Region,
+    pub region: StepRegion,
     /// Every cost map.
     pub maps: CostMaps,
 }
@@ -78,9 +78,9 @@ impl Kinematic {
         leg: &LegParams,
         kin: &LegKinematics,
         params: &GaitParams,
-        direction: Direction,
+        direction: WalkDirection,
     ) -> Result<Self> {
-        let region = Region::new(leg, params.grid.resolution_m, 0.0, direction)?;
+        let region = StepRegion::new(leg, params.grid.resolution_m, 0.0, direction)?;
         let advance = advance_map(&region, leg, kin);
         let threshold = params.body_advance.threshold_m;
         let visibility = visibility_map(
@@ -107,7 +107,7 @@ fn relaid<T: Clone>(layout: &Grid<()>, cells: &Grid<T>) -> Grid<T> {
         cells.ny(),
         cells.cells().to_vec(),
     )
-    // Only a non-finite origin fails, which `Region::new` refuses.
+    // Only a non-finite origin fails, which `StepRegion::new` refuses.
     .unwrap_or_else(|_| cells.clone())
 }
 
@@ -118,8 +118,8 @@ impl GaitPlanner {
             .map_err(|e| GaitError::LegParams(e.to_string()))?;
         params.validate()?;
         let kin = LegKinematics::new(&leg);
-        let forward = Kinematic::new(&leg, &kin, &params, Direction::Forward)?;
-        let backward = Kinematic::new(&leg, &kin, &params, Direction::Backward)?;
+        let forward = Kinematic::new(&leg, &kin, &params, WalkDirection::Forward)?;
+        let backward = Kinematic::new(&leg, &kin, &params, WalkDirection::Backward)?;
         Ok(Self {
             leg,
             params,
@@ -140,7 +140,7 @@ impl GaitPlanner {
     }
 
     /// The direction of the walk, or [`GaitError::AtGoal`].
-    pub fn direction(&self, body_y_m: f64, goal_y_m: f64) -> Result<Direction> {
+    pub fn direction(&self, body_y_m: f64, goal_y_m: f64) -> Result<WalkDirection> {
         if !body_y_m.is_finite() {
             return Err(GaitError::NotFinite {
                 what: "carriage position",
@@ -153,16 +153,16 @@ impl GaitPlanner {
             return Err(GaitError::AtGoal { body_y_m, goal_y_m });
         }
         Ok(if goal_y_m > body_y_m {
-            Direction::Forward
+            WalkDirection::Forward
         } else {
-            Direction::Backward
+            WalkDirection::Backward
         })
     }
 
     /// The planning region for a step.
-    pub fn region(&self, body_y_m: f64, goal_y_m: f64) -> Result<Region> {
+    pub fn region(&self, body_y_m: f64, goal_y_m: f64) -> Result<StepRegion> {
         let direction = self.direction(body_y_m, goal_y_m)?;
-        Region::new(
+        StepRegion::new(
             &self.leg,
             self.params.grid.resolution_m,
             body_y_m,
@@ -172,7 +172,7 @@ impl GaitPlanner {
 
     /// The polygon the footfall and elevation maps must cover (the region grown by the
     /// filter's and the clear region's radius), for `mapRegion` queries.
-    pub fn map_polygon(&self, region: &Region) -> Vec<PlanePoint> {
+    pub fn map_polygon(&self, region: &StepRegion) -> Vec<PlanePoint> {
         region.polygon(self.padding_m() + self.params.grid.resolution_m)
     }
 
@@ -191,8 +191,8 @@ impl GaitPlanner {
         let foot_radius = self.leg.leg.foot_radius_m;
         let remaining = (goal_y_m - body_y_m).abs();
         let rails = match region.direction {
-            Direction::Forward => self.leg.rails.y_max_m - body_y_m,
-            Direction::Backward => body_y_m - self.leg.rails.y_min_m,
+            WalkDirection::Forward => self.leg.rails.y_max_m - body_y_m,
+            WalkDirection::Backward => body_y_m - self.leg.rails.y_min_m,
         };
         let step_limit = p
             .body_advance
@@ -222,8 +222,8 @@ impl GaitPlanner {
             foot_radius,
         );
         let cached = match region.direction {
-            Direction::Forward => &self.forward,
-            Direction::Backward => &self.backward,
+            WalkDirection::Forward => &self.forward,
+            WalkDirection::Backward => &self.backward,
         };
         let advance = relaid(&region.layout, &cached.advance);
         let body_advance_m = advance.map(|a| a.map(|(m, _)| m));

@@ -9,28 +9,28 @@ use crate::error::{GaitError, Result};
 
 /// Which way the carriage walks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Direction {
+pub enum WalkDirection {
     /// Toward +Y.
     Forward,
     /// Toward -Y (the scanner cannot see there; the maps come from the LTM's memory).
     Backward,
 }
 
-impl Direction {
+impl WalkDirection {
     /// +1 forward, -1 backward.
     pub fn sign(self) -> f64 {
         match self {
-            Direction::Forward => 1.0,
-            Direction::Backward => -1.0,
+            WalkDirection::Forward => 1.0,
+            WalkDirection::Backward => -1.0,
         }
     }
 }
 
 /// The cost maps' grid for one step.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Region {
+pub struct StepRegion {
     /// Walking direction.
-    pub direction: Direction,
+    pub direction: WalkDirection,
     /// Carriage Y.
     pub body_y_m: f64,
     /// World X of the leg's column.
@@ -39,22 +39,22 @@ pub struct Region {
     pub layout: Grid<()>,
 }
 
-impl Region {
+impl StepRegion {
     /// The half disc of the leg's reach ahead of (behind) the carriage, as a grid of
     /// `resolution_m` cells.
     pub fn new(
         leg: &LegParams,
         resolution_m: f64,
         body_y_m: f64,
-        direction: Direction,
+        direction: WalkDirection,
     ) -> Result<Self> {
         let reach = leg.leg.upper_link_m + leg.leg.lower_link_m;
         let nx = ((2.0 * reach / resolution_m).ceil() as usize).max(1);
         let ny = ((reach / resolution_m).ceil() as usize).max(1);
         let x0 = leg.carriage.x_m - 0.5 * nx as f64 * resolution_m + 0.5 * resolution_m;
         let y0 = match direction {
-            Direction::Forward => body_y_m + 0.5 * resolution_m,
-            Direction::Backward => body_y_m - ny as f64 * resolution_m + 0.5 * resolution_m,
+            WalkDirection::Forward => body_y_m + 0.5 * resolution_m,
+            WalkDirection::Backward => body_y_m - ny as f64 * resolution_m + 0.5 * resolution_m,
         };
         let layout = Grid::filled(Point2::new(x0, y0), resolution_m, nx, ny, ()).map_err(|_| {
             GaitError::NotFinite {
@@ -93,7 +93,7 @@ mod tests {
 
     #[test]
     fn forward_region_starts_at_the_carriage_and_spans_the_reach() {
-        let r = Region::new(&LegParams::default(), 0.1, 2.0, Direction::Forward).unwrap();
+        let r = StepRegion::new(&LegParams::default(), 0.1, 2.0, WalkDirection::Forward).unwrap();
         let (lo, hi) = r.layout.bounds();
         assert!(
             (lo.y - 2.0).abs() < 1e-9 && (hi.y - 4.5).abs() < 1e-9,
@@ -104,7 +104,8 @@ mod tests {
             "{lo} {hi}"
         );
         assert_eq!((r.layout.nx(), r.layout.ny()), (50, 25));
-        let back = Region::new(&LegParams::default(), 0.1, 2.0, Direction::Backward).unwrap();
+        let back =
+            StepRegion::new(&LegParams::default(), 0.1, 2.0, WalkDirection::Backward).unwrap();
         let (lo, hi) = back.layout.bounds();
         assert!(
             (lo.y + 0.5).abs() < 1e-9 && (hi.y - 2.0).abs() < 1e-9,

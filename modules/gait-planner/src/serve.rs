@@ -15,7 +15,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::Point2;
-use tca_lrp::TerrainMap;
+use tca_lrp::TerrainGrid;
 use tca_module::{
     ComputeTime, Connector, ConstraintSpec, Context, HandlerError, Module, ModuleError, TaskRef,
 };
@@ -29,7 +29,7 @@ use crate::error::GaitError;
 use crate::params::GaitParams;
 use crate::picture::cost_maps_picture;
 use crate::planner::{AT_GOAL_M, GaitMaps, GaitPlanner, StepPlan};
-use crate::region::Direction;
+use crate::region::WalkDirection;
 
 /// The module's default name.
 pub const DEFAULT_MODULE_NAME: &str = "gait";
@@ -150,7 +150,7 @@ impl Shared {
                 polygon: polygon.clone(),
                 resolution_m,
                 // The scanner looks forward only; walking backward uses the LTM's memory.
-                refresh: region.direction == Direction::Forward,
+                refresh: region.direction == WalkDirection::Forward,
             })
             .await?;
         let elevation = ctx
@@ -169,9 +169,9 @@ impl Shared {
                 start_foot: step.start.map(|s| s.foot),
             })
             .await?;
-        let footfall = TerrainMap::from_map_grid(&footfall)?;
-        let elevation = TerrainMap::from_map_grid(&elevation)?;
-        let reachability = TerrainMap::from_map_grid(&reachability)?;
+        let footfall = TerrainGrid::from_map_grid(&footfall)?;
+        let elevation = TerrainGrid::from_map_grid(&elevation)?;
+        let reachability = TerrainGrid::from_map_grid(&reachability)?;
         let began = Instant::now();
         let planner = self.planner.clone();
         let goal_y = step.goal_y_m;

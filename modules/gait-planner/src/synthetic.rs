@@ -2,7 +2,7 @@
 //! benchmarks and offline runs (the real maps come from the LTM Manager over the bus).
 
 use nalgebra::{Matrix3, Point2, Vector3};
-use tca_lrp::{MapValue, TerrainMap};
+use tca_lrp::{MapValue, TerrainGrid};
 use tca_robot::{CellIndex, Grid, HeightField};
 use tca_single_leg_messages::MapKind;
 
@@ -14,8 +14,8 @@ pub fn elevation_map(
     min: Point2<f64>,
     max: Point2<f64>,
     resolution_m: f64,
-) -> Result<TerrainMap> {
-    TerrainMap::elevation_from_height_field(terrain, min, max, resolution_m)
+) -> Result<TerrainGrid> {
+    TerrainGrid::elevation_from_height_field(terrain, min, max, resolution_m)
         .map_err(|e| GaitError::BadMap(e.to_string()))
 }
 
@@ -28,7 +28,7 @@ pub fn footfall_map(
     max: Point2<f64>,
     resolution_m: f64,
     foot_radius_m: f64,
-) -> Result<TerrainMap> {
+) -> Result<TerrainGrid> {
     let count = |lo: f64, hi: f64| ((hi - lo) / resolution_m).ceil().max(1.0) as usize;
     let (nx, ny) = (count(min.x, max.x), count(min.y, max.y));
     let origin = Point2::new(min.x + 0.5 * resolution_m, min.y + 0.5 * resolution_m);
@@ -67,7 +67,7 @@ pub fn footfall_map(
         }
     })
     .map_err(|e| GaitError::BadMap(e.to_string()))?;
-    Ok(TerrainMap::new(MapKind::Footfall, grid))
+    Ok(TerrainGrid::new(MapKind::Footfall, grid))
 }
 
 /// Largest absolute residual of the least-squares plane `z = a + b x + c y` through points.

@@ -13,7 +13,7 @@ use nalgebra::Point2;
 use tca_central::{RunningCentral, StartOptions};
 use tca_controller_sim::sim::{LegSimulator, StartPose};
 use tca_gait_planner::{GaitConfig, synthetic};
-use tca_lrp::{LrpConfig, MapValue, TerrainMap};
+use tca_lrp::{LrpConfig, MapValue, TerrainGrid};
 use tca_messages::control::TaskOutcome;
 use tca_module::{Connector, HandlerError, Module};
 use tca_robot::{Course, ElbowBranch, HeightField, JointPosition, LegParams};
@@ -76,7 +76,7 @@ async fn scene(terrain: HeightField, body_y: f64, foot: Point2<f64>) -> Scene {
                     lo.x + cells.nx() as f64 * q.resolution_m,
                     lo.y + cells.ny() as f64 * q.resolution_m,
                 );
-                let mut map: TerrainMap = match q.kind {
+                let mut map: TerrainGrid = match q.kind {
                     MapKind::Elevation => {
                         synthetic::elevation_map(&terrain, lo, hi, q.resolution_m)?
                     }

@@ -8,7 +8,7 @@ use common::*;
 use nalgebra::Point2;
 use tca_controller_sim::sim::{LegSimulator, StartPose};
 use tca_gait_planner::GaitMaps;
-use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainMap};
+use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainGrid};
 use tca_robot::{Course, ElbowBranch, LegParams};
 
 /// Walks from the carriage at `start_y` (foot planted at `foot`) to `goal_y`; returns the
@@ -34,7 +34,7 @@ fn walk(course: u32, start_y: f64, foot: Point2<f64>, goal_y: f64) -> usize {
             return step - 1;
         }
         let (footfall, elevation) = maps_for(&terrain, body_y, goal_y);
-        let lrp_map = TerrainMap::elevation_from_height_field(
+        let lrp_map = TerrainGrid::elevation_from_height_field(
             &terrain,
             Point2::new(0.0, body_y - 2.9),
             Point2::new(6.0, body_y + 2.9),

@@ -7,13 +7,13 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::{Point2, Point3};
-use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainMap};
+use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainGrid};
 use tca_robot::{CarriagePose, Course, ElbowBranch, LegKinematics, LegParams};
 
 fn bench(c: &mut Criterion) {
     let terrain = Course::builtin(3).unwrap().height_field().unwrap();
     let body_y = 1.0;
-    let map = TerrainMap::elevation_from_height_field(
+    let map = TerrainGrid::elevation_from_height_field(
         &terrain,
         Point2::new(0.0, body_y - 2.9),
         Point2::new(6.0, body_y + 2.9),

@@ -18,7 +18,7 @@ use tca_robot::{CarriagePose, Joint, JointPosition, LegKinematics, LegParams};
 use crate::cost::JointSpeeds;
 use crate::error::{PlanError, Result};
 use crate::params::LrpParams;
-use crate::terrain_map::{ObstacleHeights, TerrainMap};
+use crate::terrain_grid::{ObstacleHeights, TerrainGrid};
 
 /// A cell of the configuration space: shoulder index and elbow index.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -76,7 +76,7 @@ impl CSpace {
         leg: &LegParams,
         params: &LrpParams,
         pose: &CarriagePose,
-        elevation: &TerrainMap,
+        elevation: &TerrainGrid,
     ) -> Result<Self> {
         params.validate()?;
         if !(pose.y_m.is_finite() && pose.roll_rad.is_finite() && pose.pitch_rad.is_finite()) {
@@ -413,10 +413,10 @@ mod tests {
     use super::*;
     use tca_robot::{Grid, HeightField};
 
-    fn flat_map(height: f64) -> TerrainMap {
+    fn flat_map(height: f64) -> TerrainGrid {
         let hf =
             HeightField::flat(Point2::new(0.0, 0.0), Point2::new(6.0, 6.0), 0.05, height).unwrap();
-        TerrainMap::elevation_from_height_field(
+        TerrainGrid::elevation_from_height_field(
             &hf,
             Point2::new(0.0, 0.0),
             Point2::new(6.0, 6.0),
@@ -425,7 +425,7 @@ mod tests {
         .unwrap()
     }
 
-    fn space(map: &TerrainMap) -> CSpace {
+    fn space(map: &TerrainGrid) -> CSpace {
         CSpace::build(
             &LegParams::default(),
             &LrpParams::default(),
@@ -474,7 +474,7 @@ mod tests {
             })
             .unwrap();
             let hf = HeightField::from_grid(grid).unwrap();
-            let map = TerrainMap::elevation_from_height_field(
+            let map = TerrainGrid::elevation_from_height_field(
                 &hf,
                 Point2::new(0.0, 0.0),
                 Point2::new(6.0, 6.0),

@@ -1,18 +1,18 @@
-//! The envelope of the Envelope Trajectory Finding Algorithm (§6.2.2, Figure 10b): the
+//! The envelope of the ReachEnvelope Trajectory Finding Algorithm (§6.2.2, Figure 10b): the
 //! lowest and highest foot heights the leg can be at, at the same moment, when the vertical
 //! axis moves at full speed while the horizontal joints move. The leg stops to lift only
 //! when the terrain ahead rises above the top of the envelope.
 
 /// Foot heights (world Z of the sole, metres) reachable at one moment: `[lo_m, hi_m]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Envelope {
+pub struct ReachEnvelope {
     /// Lowest reachable height.
     pub lo_m: f64,
     /// Highest reachable height.
     pub hi_m: f64,
 }
 
-impl Envelope {
+impl ReachEnvelope {
     /// The leg at one height.
     pub fn at(z_m: f64) -> Self {
         Self {
@@ -80,13 +80,13 @@ mod tests {
 
     #[test]
     fn the_envelope_opens_at_full_vertical_speed() {
-        let e = Envelope::at(0.2).widen(10.0, V, -0.5, 1.0);
+        let e = ReachEnvelope::at(0.2).widen(10.0, V, -0.5, 1.0);
         assert!((e.lo_m + 0.16).abs() < 1e-12 && (e.hi_m - 0.56).abs() < 1e-12);
         // The terrain underneath and the reach clip it.
-        let e = Envelope::at(0.2).widen(100.0, V, 0.1, 1.0);
+        let e = ReachEnvelope::at(0.2).widen(100.0, V, 0.1, 1.0);
         assert_eq!(
             e,
-            Envelope {
+            ReachEnvelope {
                 lo_m: 0.1,
                 hi_m: 1.0
             }
@@ -96,7 +96,7 @@ mod tests {
     #[test]
     fn terrain_within_the_envelope_costs_no_wait() {
         // Figure 10: lifting while moving reaches a 0.3 m step in time.
-        let (e, wait) = Envelope::at(0.0)
+        let (e, wait) = ReachEnvelope::at(0.0)
             .step(10.0, V, 0.0, 0.15, 0.15, 1.0)
             .unwrap();
         assert_eq!(wait, 0.0);
@@ -106,11 +106,17 @@ mod tests {
 
     #[test]
     fn terrain_above_the_envelope_stops_the_leg_to_lift() {
-        let (e, wait) = Envelope::at(0.0).step(2.0, V, 0.0, 0.5, 0.5, 1.0).unwrap();
+        let (e, wait) = ReachEnvelope::at(0.0)
+            .step(2.0, V, 0.0, 0.5, 0.5, 1.0)
+            .unwrap();
         // Half a step (1 s) lifts 3.6 cm; the remaining 46.4 cm take 12.9 s.
         assert!((wait - (0.5 - 0.036) / V).abs() < 1e-9, "{wait}");
         assert!((e.lo_m - 0.5).abs() < 1e-12);
         assert!((e.hi_m - 0.536).abs() < 1e-12);
-        assert!(Envelope::at(0.0).step(2.0, V, 0.0, 1.1, 1.1, 1.0).is_none());
+        assert!(
+            ReachEnvelope::at(0.0)
+                .step(2.0, V, 0.0, 1.1, 1.1, 1.0)
+                .is_none()
+        );
     }
 }

@@ -1,4 +1,4 @@
-//! The Envelope Trajectory Finding Algorithm (§6.2.2): A* over the shoulder x elbow grid in
+//! The ReachEnvelope Trajectory Finding Algorithm (§6.2.2): A* over the shoulder x elbow grid in
 //! which every search state carries the envelope of foot heights reachable on arrival, so a
 //! 2D search finds time- and power-efficient 3D motions.
 //!
@@ -18,7 +18,7 @@ use std::collections::BinaryHeap;
 
 use crate::cost::{CostModel, MotionCost};
 use crate::cspace::{CCell, CSpace, DIRECTIONS};
-use crate::envelope::Envelope;
+use crate::envelope::ReachEnvelope;
 
 /// A footfall as a search goal: its cell and the ground (contact) height there.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -60,7 +60,7 @@ struct Label {
     energy_j: f64,
     turns: u32,
     peak_m: f64,
-    env: Envelope,
+    env: ReachEnvelope,
     parent: u32,
 }
 
@@ -162,7 +162,7 @@ pub fn search(
         energy_j: model.vertical_energy_j(&speeds, peak - start_z_m),
         turns: 0,
         peak_m: peak,
-        env: Envelope::at(start_z_m.max(r0)),
+        env: ReachEnvelope::at(start_z_m.max(r0)),
         parent: NO_PARENT,
     };
     let g0 = start_label.time_s + energy_weight * start_label.energy_j;

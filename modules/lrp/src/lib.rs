@@ -1,15 +1,15 @@
 //! Leg Recovery Planner (report 003, §6.2.2 and §6.3): moves the foot from where it is to a
 //! footfall without striking terrain, with time- and power-efficient trajectories found by
-//! the Envelope Trajectory Finding Algorithm, and tells the Gait Planner which footfalls the
+//! the ReachEnvelope Trajectory Finding Algorithm, and tells the Gait Planner which footfalls the
 //! foot can reach.
 //!
 //! ```
 //! use nalgebra::{Point2, Point3};
-//! use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainMap};
+//! use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainGrid};
 //! use tca_robot::{Course, ElbowBranch, CarriagePose, LegKinematics, LegParams};
 //!
 //! let terrain = Course::builtin(3)?.height_field()?;
-//! let map = TerrainMap::elevation_from_height_field(
+//! let map = TerrainGrid::elevation_from_height_field(
 //!     &terrain, Point2::new(0.0, 0.0), Point2::new(6.0, 5.0), 0.05)?;
 //! let planner = LegRecoveryPlanner::new(LegParams::default(), LrpParams::default())?;
 //! // The foot stands on the sand behind and left of the carriage at y = 2 m ...
@@ -27,11 +27,11 @@
 //! - [`params`]: [`LrpParams`], the planner's own parameters (cell size, margins, cost).
 //! - [`cost`]: [`CostModel`] (time, energy and their ratio, turn penalty) and
 //!   [`JointSpeeds`].
-//! - [`terrain_map`]: [`TerrainMap`] (the LTM Manager's maps with unknown and occluded
+//! - [`terrain_grid`]: [`TerrainGrid`] (the LTM Manager's maps with unknown and occluded
 //!   cells, converted from and to the wire) and [`ObstacleHeights`] (conservative heights).
 //! - [`cspace`]: [`CSpace`], the shoulder x elbow grid of lowest foot heights.
-//! - [`envelope`]: [`Envelope`], the heights reachable at one moment.
-//! - [`etfa`]: the Envelope Trajectory Finding Algorithm (A*).
+//! - [`envelope`]: [`ReachEnvelope`], the heights reachable at one moment.
+//! - [`etfa`]: the ReachEnvelope Trajectory Finding Algorithm (A*).
 //! - [`trajectory`]: way-point extraction (lifts first, lowers last) and an independent
 //!   clearance check.
 //! - [`planner`]: [`LegRecoveryPlanner`], input checks and the whole pipeline;
@@ -61,14 +61,14 @@ pub mod picture;
 pub mod planner;
 pub mod polygon;
 mod serve;
-pub mod terrain_map;
+pub mod terrain_grid;
 pub mod trajectory;
 
 pub use cost::{CostModel, JointSpeeds, MotionCost};
 pub use cspace::{CCell, CSpace};
-pub use envelope::Envelope;
+pub use envelope::ReachEnvelope;
 pub use error::{PlanError, Result};
 pub use params::LrpParams;
 pub use planner::{LegPlan, LegRecoveryPlanner, Reachability};
 pub use serve::{DEFAULT_MODULE_NAME, LrpConfig, connect, reachability_map};
-pub use terrain_map::{MapValue, ObstacleHeights, TerrainMap};
+pub use terrain_grid::{MapValue, ObstacleHeights, TerrainGrid};

@@ -13,7 +13,7 @@ use crate::cspace::{CCell, CSpace};
 use crate::error::{PlanError, Result};
 use crate::etfa::{self, SearchGoal};
 use crate::params::LrpParams;
-use crate::terrain_map::TerrainMap;
+use crate::terrain_grid::TerrainGrid;
 use crate::trajectory::{self, TrajectoryPoint};
 
 /// A planned leg trajectory.
@@ -143,7 +143,7 @@ impl LegRecoveryPlanner {
 
     /// The configuration space over an elevation map with the (level) carriage at
     /// `body_y_m`.
-    pub fn cspace(&self, elevation: &TerrainMap, body_y_m: f64) -> Result<CSpace> {
+    pub fn cspace(&self, elevation: &TerrainGrid, body_y_m: f64) -> Result<CSpace> {
         if !body_y_m.is_finite() {
             return Err(PlanError::NotFinite {
                 what: "carriage position",
@@ -160,7 +160,7 @@ impl LegRecoveryPlanner {
     /// Plans the leg from `start` to the footfall (world frame) over an elevation map.
     pub fn plan(
         &self,
-        elevation: &TerrainMap,
+        elevation: &TerrainGrid,
         body_y_m: f64,
         start: &JointPosition,
         footfall: &Point3<f64>,

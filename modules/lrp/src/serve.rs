@@ -24,7 +24,7 @@ use crate::params::LrpParams;
 use crate::picture::cspace_picture;
 use crate::planner::LegRecoveryPlanner;
 use crate::polygon::{rectangle, region_grid};
-use crate::terrain_map::TerrainMap;
+use crate::terrain_grid::TerrainGrid;
 
 /// The module's default name.
 pub const DEFAULT_MODULE_NAME: &str = "lrp";
@@ -124,7 +124,7 @@ impl Shared {
         ctx: &Context,
         body_y_m: f64,
         start_foot: Option<WorldPoint>,
-    ) -> Result<(TerrainMap, JointPosition), HandlerError> {
+    ) -> Result<(TerrainGrid, JointPosition), HandlerError> {
         let leg = self.planner.leg_params();
         let reach = leg.leg.upper_link_m + leg.leg.lower_link_m + 0.5;
         let x = leg.carriage.x_m;
@@ -138,7 +138,7 @@ impl Shared {
             refresh: false,
         };
         let map = ctx.query(&region).await?;
-        let map = TerrainMap::from_map_grid(&map)?;
+        let map = TerrainGrid::from_map_grid(&map)?;
         let joints = joints_from_message(&ctx.query(&JointLegPosition).await?);
         let start = match start_foot {
             // Planned ahead: the leg as it will be, on the elbow branch it is on now.

@@ -14,7 +14,7 @@ use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 use tca_central::{RunningCentral, StartOptions};
 use tca_controller_sim::sim::{LegSimulator, StartPose};
-use tca_lrp::{LrpConfig, MapValue, TerrainMap};
+use tca_lrp::{LrpConfig, MapValue, TerrainGrid};
 use tca_messages::control::TaskOutcome;
 use tca_module::{Connector, HandlerError, Module};
 use tca_robot::{Course, ElbowBranch, HeightField, JointPosition, LegParams};
@@ -87,7 +87,7 @@ async fn scene(terrain: HeightField, body_y: f64, foot: Point2<f64>) -> Scene {
                     lo.y + cells.ny() as f64 * q.resolution_m,
                 );
                 let mut map =
-                    TerrainMap::elevation_from_height_field(&terrain, lo, hi, q.resolution_m)?;
+                    TerrainGrid::elevation_from_height_field(&terrain, lo, hi, q.resolution_m)?;
                 for (c, v) in map.grid_mut().iter_mut() {
                     if !cells.get(c).copied().unwrap_or(false) {
                         *v = MapValue::Unknown;

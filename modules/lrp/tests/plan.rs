@@ -6,7 +6,7 @@ mod common;
 use common::*;
 use nalgebra::{Point2, Point3};
 use tca_lrp::trajectory::check_clearance;
-use tca_lrp::{CostModel, LegRecoveryPlanner, LrpParams, MapValue, PlanError, TerrainMap};
+use tca_lrp::{CostModel, LegRecoveryPlanner, LrpParams, MapValue, PlanError, TerrainGrid};
 use tca_robot::{Course, ElbowBranch, LegKinematics, LegParams};
 
 const V: f64 = 0.036;
@@ -309,7 +309,7 @@ fn unknown_terrain_counts_as_an_obstacle_of_the_configured_height() {
     let params = LrpParams::default();
     let want = params.unknown_height_m + params.clearance_m;
     assert!((peak - want).abs() < 1e-9, "{peak} against {want}");
-    let _: &TerrainMap = &map;
+    let _: &TerrainGrid = &map;
 }
 
 mod properties {

@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
 use tca_ism::{SensorSpec, VirtualScanner};
-use tca_ltm::{BuilderConfig, Cell, LtmConfig, Patch, TerrainMap, build_map};
+use tca_ltm::{BuilderConfig, Cell, LocalTerrainMap, LtmConfig, Patch, build_map};
 use tca_robot::{CarriagePose, Course, HeightField, LegParams};
 use tca_single_leg_messages::{MapKind, MapRegion, PlanePoint, RangeImage};
 
@@ -65,8 +65,8 @@ fn build(c: &mut Criterion) {
 }
 
 /// A map at the configured resolution already holding `window`.
-fn filled(config: &LtmConfig, window: &Patch) -> TerrainMap {
-    let mut map = TerrainMap::new(config.clone()).expect("map");
+fn filled(config: &LtmConfig, window: &Patch) -> LocalTerrainMap {
+    let mut map = LocalTerrainMap::new(config.clone()).expect("map");
     map.merge(window).expect("merges");
     map
 }
@@ -122,7 +122,7 @@ fn queries(c: &mut Criterion) {
         builder: builder(0.05, 1),
         ..LtmConfig::default()
     };
-    let mut map = TerrainMap::new(config).expect("map");
+    let mut map = LocalTerrainMap::new(config).expect("map");
     map.add_image(&image(SensorSpec::erim(), &terrain, 1.0, 0))
         .expect("merges");
     map.add_image(&image(SensorSpec::perceptron(), &terrain, 1.0, 1))

@@ -16,7 +16,7 @@
 //! - [`footfall`]: footfall cost and slope over the foot's area.
 //! - [`region`]: checked query regions (polygon and resolution) and their grids.
 //! - [`query`]: answering region queries, and the query cache.
-//! - [`manager`]: [`TerrainMap`], the whole manager's state, and [`LtmConfig`].
+//! - [`manager`]: [`LocalTerrainMap`], the whole manager's state, and [`LtmConfig`].
 //! - [`module`]: the LTM Manager on the bus: [`connect`] answers `mapRegion`, asking the ISM
 //!   for `acquireImage` when a refresh is requested or it has no map yet.
 //! - [`error`]: [`LtmError`] and the [`Result`] alias.
@@ -37,7 +37,7 @@ pub use builder::{BuilderConfig, build_map};
 pub use cell::{Cell, CellState, fuse};
 pub use error::{LtmError, Result};
 pub use footfall::{FootEvaluator, FootParams, Footing};
-pub use manager::{LtmConfig, MergeReport, TerrainMap};
+pub use manager::{LocalTerrainMap, LtmConfig, MergeReport};
 pub use module::{connect, connect_with_map};
 pub use patch::Patch;
 pub use query::CacheStats;

@@ -1,5 +1,5 @@
 //! The LTM Manager's state: the builder, the merged map in its scrolling store, and the query
-//! cache, behind one type ([`TerrainMap`]) the module wraps.
+//! cache, behind one type ([`LocalTerrainMap`]) the module wraps.
 
 use std::path::PathBuf;
 
@@ -75,7 +75,7 @@ pub struct MergeReport {
 
 /// The local terrain map: build, merge, scroll, query.
 #[derive(Debug)]
-pub struct TerrainMap {
+pub struct LocalTerrainMap {
     config: LtmConfig,
     store: TileStore,
     cache: QueryCache,
@@ -83,7 +83,7 @@ pub struct TerrainMap {
     _temp: Option<tempfile::TempDir>,
 }
 
-impl TerrainMap {
+impl LocalTerrainMap {
     /// An empty map.
     pub fn new(config: LtmConfig) -> Result<Self> {
         config.builder.validate()?;

@@ -12,11 +12,11 @@ use std::sync::{Arc, Mutex};
 use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
 use tca_single_leg_messages::{AcquireImage, MapGrid, MapRegion};
 
-use crate::manager::{LtmConfig, TerrainMap};
+use crate::manager::{LocalTerrainMap, LtmConfig};
 
 /// Connects the LTM Manager module (`"ltm"`) with an empty map and serves `mapRegion`.
 pub async fn connect(connector: &Connector, config: LtmConfig) -> Result<Module, ModuleError> {
-    let map = TerrainMap::new(config).map_err(|e| ModuleError::Usage(e.to_string()))?;
+    let map = LocalTerrainMap::new(config).map_err(|e| ModuleError::Usage(e.to_string()))?;
     connect_with_map(connector, map).await
 }
 
@@ -24,7 +24,7 @@ pub async fn connect(connector: &Connector, config: LtmConfig) -> Result<Module,
 /// directory, or built from stored images).
 pub async fn connect_with_map(
     connector: &Connector,
-    map: TerrainMap,
+    map: LocalTerrainMap,
 ) -> Result<Module, ModuleError> {
     let simulated_time = map.config().simulated_time;
     let map = Arc::new(Mutex::new(map));
@@ -40,14 +40,16 @@ pub async fn connect_with_map(
         .await
 }
 
-fn lock(map: &Mutex<TerrainMap>) -> Result<std::sync::MutexGuard<'_, TerrainMap>, HandlerError> {
+fn lock(
+    map: &Mutex<LocalTerrainMap>,
+) -> Result<std::sync::MutexGuard<'_, LocalTerrainMap>, HandlerError> {
     map.lock()
         .map_err(|_| HandlerError::new("the terrain map was poisoned by an earlier panic"))
 }
 
 async fn map_region(
     ctx: &Context,
-    map: Arc<Mutex<TerrainMap>>,
+    map: Arc<Mutex<LocalTerrainMap>>,
     request: MapRegion,
 ) -> Result<MapGrid, HandlerError> {
     let (needs_image, sensor) = {

@@ -5,7 +5,7 @@ mod common;
 use common::{BOX, image, rect, scanner, terrain};
 use nalgebra::Point2;
 use tca_ism::SensorSpec;
-use tca_ltm::{BuilderConfig, CellState, LtmConfig, LtmError, TerrainMap, build_map};
+use tca_ltm::{BuilderConfig, CellState, LocalTerrainMap, LtmConfig, LtmError, build_map};
 use tca_single_leg_messages::{MapCell, MapKind, MapRegion, PlanePoint};
 
 fn config() -> LtmConfig {
@@ -113,7 +113,7 @@ fn two_merged_scans_are_more_certain_than_either() {
     let s = scanner(SensorSpec::erim(), terrain(&[BOX]), true, 3);
     let first = build_map(&image(&s, 1.0, 0), &BuilderConfig::default()).unwrap();
     let second = build_map(&image(&s, 1.6, 1), &BuilderConfig::default()).unwrap();
-    let mut map = TerrainMap::new(config()).unwrap();
+    let mut map = LocalTerrainMap::new(config()).unwrap();
     map.merge(&first).unwrap();
     map.merge(&second).unwrap();
     let mut both = 0;
@@ -135,7 +135,7 @@ fn two_merged_scans_are_more_certain_than_either() {
 #[test]
 fn a_map_scrolled_to_disk_and_back_is_unchanged() {
     let s = scanner(SensorSpec::erim(), terrain(&[BOX]), true, 4);
-    let mut map = TerrainMap::new(config()).unwrap();
+    let mut map = LocalTerrainMap::new(config()).unwrap();
     map.add_image(&image(&s, 1.0, 0)).unwrap();
     map.add_image(&image(&s, 2.0, 1)).unwrap();
     let (i0, j0, n) = (-40, 60, 200);
@@ -155,7 +155,7 @@ fn a_map_scrolled_to_disk_and_back_is_unchanged() {
 #[test]
 fn polygon_queries_mark_outside_cells_unknown_even_after_scrolling() {
     let s = scanner(SensorSpec::erim(), terrain(&[BOX]), true, 5);
-    let mut map = TerrainMap::new(config()).unwrap();
+    let mut map = LocalTerrainMap::new(config()).unwrap();
     map.add_image(&image(&s, 1.0, 0)).unwrap();
     let triangle = vec![
         PlanePoint { x_m: 1.0, y_m: 6.0 },
@@ -209,9 +209,9 @@ fn polygon_queries_mark_outside_cells_unknown_even_after_scrolling() {
 #[test]
 fn footfall_and_slope_see_the_box_edges() {
     let s = scanner(SensorSpec::perceptron(), terrain(&[BOX]), true, 6);
-    let mut map = TerrainMap::new(config()).unwrap();
+    let mut map = LocalTerrainMap::new(config()).unwrap();
     map.add_image(&image(&s, 1.0, 0)).unwrap();
-    let value = |kind, x: f64, y: f64, map: &mut TerrainMap| {
+    let value = |kind, x: f64, y: f64, map: &mut LocalTerrainMap| {
         let g = map
             .query(&MapRegion {
                 kind,
@@ -247,7 +247,7 @@ fn footfall_and_slope_see_the_box_edges() {
 #[test]
 fn overlapping_queries_reuse_cached_cells() {
     let s = scanner(SensorSpec::erim(), terrain(&[]), true, 7);
-    let mut map = TerrainMap::new(config()).unwrap();
+    let mut map = LocalTerrainMap::new(config()).unwrap();
     map.add_image(&image(&s, 1.0, 0)).unwrap();
     let q = |x0: f64| MapRegion {
         kind: MapKind::Footfall,
@@ -275,7 +275,7 @@ fn overlapping_queries_reuse_cached_cells() {
 fn bad_input_gives_clear_errors() {
     let s = scanner(SensorSpec::erim(), terrain(&[]), false, 0);
     let mut img = image(&s, 1.0, 0);
-    let mut map = TerrainMap::new(config()).unwrap();
+    let mut map = LocalTerrainMap::new(config()).unwrap();
     // An Erim image with the Perceptron's size.
     img.width = 256;
     img.height = 256;

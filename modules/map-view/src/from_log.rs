@@ -1,5 +1,5 @@
 //! Maps from a traffic log: the range images the ISM returned (`acquireImage` replies) are fed,
-//! in order, to a fresh LTM Manager map ([`TerrainMap`]), which rebuilds the map the running
+//! in order, to a fresh LTM Manager map ([`LocalTerrainMap`]), which rebuilds the map the running
 //! LTM Manager had (same builder, merger and scroller); the footfalls are those the Gait
 //! Planner announced (`stepPlanned`), or else those it sent the Leg Recovery Planner
 //! (`recoverLeg`).
@@ -8,7 +8,7 @@ use std::path::Path;
 
 use anyhow::{Context as _, bail};
 use tca_logs::{Direction, LogFile, RecordKind, TimeBase};
-use tca_ltm::{LtmConfig, TerrainMap};
+use tca_ltm::{LocalTerrainMap, LtmConfig};
 use tca_messages::{Class, decode_data};
 use tca_single_leg_messages::{
     MapRegion, Overlay, RangeImage, RecoverLeg, StepPlanned, WorldPoint,
@@ -119,11 +119,11 @@ fn timed<T>(values: Vec<(u64, T)>, start_ns: u64) -> Vec<Timed<T>> {
 /// Rebuilds the LTM Manager's map from `images` (each merged as the LTM Manager merges it).
 /// Images that do not build (refused by the builder) are skipped with a warning; returns the
 /// map and the number of images merged.
-pub fn rebuild(images: &[RangeImage]) -> anyhow::Result<(TerrainMap, usize)> {
+pub fn rebuild(images: &[RangeImage]) -> anyhow::Result<(LocalTerrainMap, usize)> {
     let sensor = images
         .first()
         .map_or(LtmConfig::default().sensor, |i| i.sensor);
-    let mut map = TerrainMap::new(LtmConfig {
+    let mut map = LocalTerrainMap::new(LtmConfig {
         sensor,
         ..LtmConfig::default()
     })

@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use tca_ism::{SensorSpec, VirtualScanner};
-use tca_ltm::{LtmConfig, TerrainMap};
+use tca_ltm::{LocalTerrainMap, LtmConfig};
 use tca_pdm::{RenderOptions, render, render_png};
 use tca_robot::{CarriagePose, Course, LegParams};
 use tca_single_leg_messages::{MapGrid, MapKind, MapRegion, Overlay, PlanePoint, WorldPoint};
@@ -21,7 +21,7 @@ fn pit_map(kind: MapKind) -> MapGrid {
             .expect("course 3 renders"),
     );
     let scanner = VirtualScanner::new(SensorSpec::erim(), terrain, &LegParams::default());
-    let mut map = TerrainMap::new(LtmConfig::default()).expect("a map");
+    let mut map = LocalTerrainMap::new(LtmConfig::default()).expect("a map");
     for (k, y) in [1.0, 3.0, 5.0, 7.0].into_iter().enumerate() {
         let image = scanner
             .cast(&CarriagePose::level(y), k as u64)

@@ -6,7 +6,7 @@
 use std::sync::Arc;
 
 use tca_ism::{SensorSpec, VirtualScanner};
-use tca_ltm::{LtmConfig, TerrainMap};
+use tca_ltm::{LocalTerrainMap, LtmConfig};
 use tca_pdm::{RenderOptions, write_png};
 use tca_robot::{CarriagePose, Course, LegParams};
 use tca_single_leg_messages::{MapKind, MapRegion, Overlay, PlanePoint, WorldPoint};
@@ -19,7 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let terrain = Arc::new(Course::builtin(course)?.height_field()?);
     let params = LegParams::default();
     let scanner = VirtualScanner::new(SensorSpec::erim(), terrain, &params).with_seed(1);
-    let mut map = TerrainMap::new(LtmConfig::default())?;
+    let mut map = LocalTerrainMap::new(LtmConfig::default())?;
     let stations = [0.5, 1.5, 2.5, 3.5, 4.5];
     for (k, &y) in stations.iter().enumerate() {
         map.add_image(&scanner.cast(&CarriagePose::level(y), k as u64)?)?;

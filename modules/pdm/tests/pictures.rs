@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use nalgebra::Point2;
 use tca_ism::{SensorSpec, VirtualScanner};
-use tca_ltm::{LtmConfig, TerrainMap};
+use tca_ltm::{LocalTerrainMap, LtmConfig};
 use tca_pdm::render::{OCCLUDED_COLOURS, OVERLAY, UNKNOWN_COLOURS, ramp};
 use tca_pdm::{MapLayout, PdmError, RenderOptions, render, write_png};
 use tca_robot::{CarriagePose, HeightField, LegParams};
@@ -196,7 +196,7 @@ fn a_real_map_of_a_box_is_written_as_png() {
     let mut params = LegParams::default();
     params.scanner.pitch_down_rad = 35f64.to_radians();
     let scanner = VirtualScanner::new(SensorSpec::erim(), terrain, &params);
-    let mut map = TerrainMap::new(LtmConfig::default()).unwrap();
+    let mut map = LocalTerrainMap::new(LtmConfig::default()).unwrap();
     map.add_image(&scanner.cast(&CarriagePose::level(1.0), 0).unwrap())
         .unwrap();
     let region = MapRegion {

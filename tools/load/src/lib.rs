@@ -31,19 +31,19 @@ pub use report::{ClassCounts, LoadReport};
 
 /// How central is reached.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Transport {
+pub enum TransportKind {
     /// Central and the modules share channels in this process.
     InProcess,
     /// Central listens on a free loopback port; each module is its own zenoh client session.
     Zenoh,
 }
 
-impl Transport {
+impl TransportKind {
     /// A word for tables.
     pub fn label(self) -> &'static str {
         match self {
-            Transport::InProcess => "in-process",
-            Transport::Zenoh => "zenoh",
+            TransportKind::InProcess => "in-process",
+            TransportKind::Zenoh => "zenoh",
         }
     }
 }
@@ -60,7 +60,7 @@ pub struct LoadOptions {
     /// Goals one module handles at once (its hello's capacity).
     pub capacity: u32,
     /// How central is reached.
-    pub transport: Transport,
+    pub transport: TransportKind,
     /// Central's limits.
     pub config: CentralConfig,
     /// Seed of the modules' random choices.
@@ -74,7 +74,7 @@ impl Default for LoadOptions {
             duration: Duration::from_secs(60),
             window: 16,
             capacity: 4,
-            transport: Transport::InProcess,
+            transport: TransportKind::InProcess,
             config: CentralConfig::default(),
             seed: 1,
         }
@@ -132,15 +132,15 @@ pub async fn run(options: &LoadOptions, log_dir: &Path) -> anyhow::Result<LoadRe
         config: options.config.clone(),
         log: Some(log.clone()),
         listen: match options.transport {
-            Transport::InProcess => vec![],
-            Transport::Zenoh => vec![endpoint.clone()],
+            TransportKind::InProcess => vec![],
+            TransportKind::Zenoh => vec![endpoint.clone()],
         },
     })
     .await
     .context("central did not start")?;
     let connector = match options.transport {
-        Transport::InProcess => Connector::from(central.in_process()),
-        Transport::Zenoh => Connector::zenoh(endpoint),
+        TransportKind::InProcess => Connector::from(central.in_process()),
+        TransportKind::Zenoh => Connector::zenoh(endpoint),
     };
     let tally = Arc::new(Tally::default());
     let connecting = Instant::now();

@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use tca_central::{CentralConfig, Stats};
 
-use super::Transport;
+use super::TransportKind;
 
 /// Log records one batch of central's driver may add past `max_log_backlog` (512 inputs of a
 /// few records each).
@@ -33,7 +33,7 @@ pub struct LoadReport {
     /// Modules connected.
     pub modules: usize,
     /// How central was reached.
-    pub transport: Transport,
+    pub transport: TransportKind,
     /// Queries and goals one module had in flight at most.
     pub window: usize,
     /// How long the modules sent.

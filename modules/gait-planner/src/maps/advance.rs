@@ -11,7 +11,7 @@
 use nalgebra::Point3;
 use tca_robot::{ElbowBranch, Grid, JointPosition, LegKinematics, LegParams};
 
-use crate::region::{Direction, Region};
+use crate::region::{StepRegion, WalkDirection};
 
 /// Samples per grid cell along Y.
 const SAMPLES_PER_CELL: usize = 4;
@@ -19,7 +19,7 @@ const SAMPLES_PER_CELL: usize = 4;
 /// Per cell: the largest advance (metres, >= 0) and the elbow branch giving it; `None` where
 /// the foot cannot be at the cell at all.
 pub(crate) fn advance_map(
-    region: &Region,
+    region: &StepRegion,
     leg: &LegParams,
     kin: &LegKinematics,
 ) -> Grid<Option<(f64, ElbowBranch)>> {
@@ -48,7 +48,7 @@ pub(crate) fn advance_map(
                 .map(|k| feasible(x, k as f64 * h, branch).is_some())
                 .collect();
             match region.direction {
-                Direction::Forward => {
+                WalkDirection::Forward => {
                     for k in 0..samples {
                         run[k] = match (ok[k], k.checked_sub(1)) {
                             (false, _) => -1,
@@ -57,7 +57,7 @@ pub(crate) fn advance_map(
                         };
                     }
                 }
-                Direction::Backward => {
+                WalkDirection::Backward => {
                     for k in (0..samples).rev() {
                         run[k] = match (ok[k], ok.get(k + 1)) {
                             (false, _) => -1,
@@ -97,7 +97,7 @@ mod tests {
     fn the_advance_ends_at_full_extension_or_at_the_column() {
         let leg = LegParams::default();
         let kin = LegKinematics::new(&leg);
-        let region = Region::new(&leg, 0.1, 2.0, Direction::Forward).unwrap();
+        let region = StepRegion::new(&leg, 0.1, 2.0, WalkDirection::Forward).unwrap();
         let map = advance_map(&region, &leg, &kin);
         // The cell 1.05 m ahead of the column and 1.05 m to its side: the foot can travel
         // back until it is 2.5 m (nearly straight links) from the column.
@@ -135,11 +135,11 @@ mod tests {
     fn walking_backward_mirrors_walking_forward() {
         let leg = LegParams::default();
         let kin = LegKinematics::new(&leg);
-        let fwd = Region::new(&leg, 0.1, 5.0, Direction::Forward).unwrap();
-        let back = Region::new(&leg, 0.1, 5.0, Direction::Backward).unwrap();
+        let fwd = StepRegion::new(&leg, 0.1, 5.0, WalkDirection::Forward).unwrap();
+        let back = StepRegion::new(&leg, 0.1, 5.0, WalkDirection::Backward).unwrap();
         let f = advance_map(&fwd, &leg, &kin);
         let b = advance_map(&back, &leg, &kin);
-        let a = |g: &Grid<Option<(f64, ElbowBranch)>>, r: &Region, y: f64| {
+        let a = |g: &Grid<Option<(f64, ElbowBranch)>>, r: &StepRegion, y: f64| {
             g.get(r.layout.cell_at(nalgebra::Point2::new(3.95, y)).unwrap())
                 .unwrap()
                 .unwrap()

@@ -2,16 +2,16 @@
 //! the foot's vertical reach (the body height is fixed, so the leg cannot reach ground that
 //! is too high or too low). Binary.
 
-use tca_lrp::{ObstacleHeights, TerrainMap};
+use tca_lrp::{ObstacleHeights, TerrainGrid};
 use tca_robot::Grid;
 
-use crate::region::Region;
+use crate::region::StepRegion;
 
 /// Per cell: the highest known ground under the foot disc (`None` when any of it is unknown
 /// or occluded).
 pub(crate) fn ground_map(
-    region: &Region,
-    elevation: &TerrainMap,
+    region: &StepRegion,
+    elevation: &TerrainGrid,
     foot_radius_m: f64,
 ) -> Grid<Option<f64>> {
     let heights = ObstacleHeights::new(elevation, 0.0, f64::INFINITY);

@@ -1,11 +1,11 @@
 //! The footfall, filtered footfall and clear-region maps (§6.2.1, §8.2), from the LTM
 //! Manager's footfall statistic (metres of deviation from a plane under the foot).
 
-use tca_lrp::TerrainMap;
+use tca_lrp::TerrainGrid;
 use tca_robot::Grid;
 
 use crate::params::FootfallParams;
-use crate::region::Region;
+use crate::region::StepRegion;
 
 /// A map sampled at the region's cell centres, padded by `pad` cells on every side.
 pub(crate) struct Padded<T> {
@@ -17,8 +17,8 @@ pub(crate) struct Padded<T> {
 impl<T: Copy> Padded<T> {
     /// Samples `f(map value at the centre)` over the padded grid.
     pub(crate) fn sample(
-        region: &Region,
-        map: &TerrainMap,
+        region: &StepRegion,
+        map: &TerrainGrid,
         pad: usize,
         f: impl Fn(tca_lrp::MapValue) -> T,
     ) -> Self {
@@ -77,7 +77,7 @@ pub(crate) fn offsets_within(radius_m: f64, resolution_m: f64) -> Vec<(isize, is
 /// The graded footfall cost at every cell (0 flat .. 1 at `worst_m` and above); `None`
 /// where the statistic is unknown.
 pub(crate) fn footfall_cost(
-    region: &Region,
+    region: &StepRegion,
     statistic: &Padded<Option<f64>>,
     params: &FootfallParams,
 ) -> Grid<Option<f64>> {
@@ -95,7 +95,7 @@ pub(crate) fn footfall_cost(
 /// The filtered footfall map: the greatest footfall cost within `radius_m`, each weighted
 /// by `scale / (scale + distance)`; unknown neighbours cost 1.
 pub(crate) fn filtered_footfall(
-    region: &Region,
+    region: &StepRegion,
     statistic: &Padded<Option<f64>>,
     worst_m: f64,
     radius_m: f64,
@@ -127,7 +127,7 @@ pub(crate) fn filtered_footfall(
 /// `clear_radius - foot_radius` is known and at most `clear_max_m` (so the union of the
 /// flat foot discs covers the clear disc) and the elevation within the clear radius is known.
 pub(crate) fn clear_region(
-    region: &Region,
+    region: &StepRegion,
     statistic: &Padded<Option<f64>>,
     elevation_known: &Padded<bool>,
     params: &FootfallParams,

@@ -7,12 +7,12 @@ use nalgebra::{Isometry3, Point3};
 use tca_robot::{ElbowBranch, Grid, LegKinematics, LegParams};
 
 use crate::params::VisibilityParams;
-use crate::region::Region;
+use crate::region::StepRegion;
 
 /// Fraction of the links' sample points inside the field of view, per cell, after moving
 /// the carriage by `advance(cell)`; 0 where the cell has no advance entry.
 pub(crate) fn visibility_map(
-    region: &Region,
+    region: &StepRegion,
     leg: &LegParams,
     kin: &LegKinematics,
     params: &VisibilityParams,
@@ -66,7 +66,7 @@ pub(crate) fn visibility_map(
 mod tests {
     use super::*;
     use crate::maps::advance::advance_map;
-    use crate::region::Direction;
+    use crate::region::WalkDirection;
 
     #[test]
     fn links_ahead_of_the_carriage_are_seen_and_links_behind_are_not() {
@@ -75,7 +75,7 @@ mod tests {
         let mut leg = LegParams::default();
         leg.scanner.pitch_down_rad = 35f64.to_radians();
         let kin = LegKinematics::new(&leg);
-        let region = Region::new(&leg, 0.1, 2.0, Direction::Forward).unwrap();
+        let region = StepRegion::new(&leg, 0.1, 2.0, WalkDirection::Forward).unwrap();
         let advance = advance_map(&region, &leg, &kin);
         // No body move: a foot 2.2 m straight ahead puts the links under the scanner's gaze.
         let none = visibility_map(

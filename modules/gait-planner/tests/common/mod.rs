@@ -4,7 +4,7 @@
 
 use nalgebra::{Point2, Point3};
 use tca_gait_planner::{GaitMaps, GaitParams, GaitPlanner, Result, StepPlan, synthetic};
-use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainMap};
+use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainGrid};
 use tca_robot::{CarriagePose, ElbowBranch, HeightField, JointPosition, LegKinematics, LegParams};
 
 pub fn planner() -> GaitPlanner {
@@ -12,7 +12,7 @@ pub fn planner() -> GaitPlanner {
 }
 
 /// Footfall and elevation maps (10 cm) over the polygon the planner asks for.
-pub fn maps_for(terrain: &HeightField, body_y: f64, goal_y: f64) -> (TerrainMap, TerrainMap) {
+pub fn maps_for(terrain: &HeightField, body_y: f64, goal_y: f64) -> (TerrainGrid, TerrainGrid) {
     let p = planner();
     let region = p.region(body_y, goal_y).unwrap();
     let poly = p.map_polygon(&region);
@@ -47,7 +47,7 @@ pub fn plan_with_lrp(
 ) -> Result<StepPlan> {
     let (footfall, elevation) = maps_for(terrain, body_y, goal_y);
     let lrp = LegRecoveryPlanner::new(LegParams::default(), LrpParams::default()).unwrap();
-    let lrp_map = TerrainMap::elevation_from_height_field(
+    let lrp_map = TerrainGrid::elevation_from_height_field(
         terrain,
         Point2::new(0.0, body_y - 2.9),
         Point2::new(6.0, body_y + 2.9),

@@ -5,7 +5,7 @@
 use nalgebra::{Point2, Point3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainMap};
+use tca_lrp::{LegRecoveryPlanner, LrpParams, TerrainGrid};
 use tca_robot::{
     CarriagePose, ElbowBranch, Grid, HeightField, JointPosition, LegKinematics, LegParams,
 };
@@ -22,8 +22,8 @@ pub fn kin() -> LegKinematics {
 }
 
 /// The elevation map of the leg's whole reach around the carriage.
-pub fn map_around(terrain: &HeightField, body_y_m: f64) -> TerrainMap {
-    TerrainMap::elevation_from_height_field(
+pub fn map_around(terrain: &HeightField, body_y_m: f64) -> TerrainGrid {
+    TerrainGrid::elevation_from_height_field(
         terrain,
         Point2::new(0.0, body_y_m - 2.9),
         Point2::new(6.0, body_y_m + 2.9),

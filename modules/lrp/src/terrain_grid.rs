@@ -77,12 +77,12 @@ impl MapValue {
 
 /// A terrain map of one kind over a world XY grid.
 #[derive(Debug, Clone, PartialEq)]
-pub struct TerrainMap {
+pub struct TerrainGrid {
     kind: MapKind,
     grid: Grid<MapValue>,
 }
 
-impl TerrainMap {
+impl TerrainGrid {
     /// A map from a grid of values.
     pub fn new(kind: MapKind, grid: Grid<MapValue>) -> Self {
         Self { kind, grid }
@@ -246,7 +246,7 @@ pub struct ObstacleHeights {
 impl ObstacleHeights {
     /// Known cells count as `value + sigma_factor * sigma`, occluded ones as their maximum,
     /// unknown ones (and everything off the map) as `unknown_height_m`.
-    pub fn new(map: &TerrainMap, sigma_factor: f64, unknown_height_m: f64) -> Self {
+    pub fn new(map: &TerrainGrid, sigma_factor: f64, unknown_height_m: f64) -> Self {
         let g = map.grid();
         let mut height_m = Vec::with_capacity(g.len());
         let mut known = Vec::with_capacity(g.len());
@@ -487,7 +487,7 @@ mod tests {
 
     #[test]
     fn elevation_from_a_height_field_keeps_the_tops() {
-        let map = TerrainMap::elevation_from_height_field(
+        let map = TerrainGrid::elevation_from_height_field(
             &flat_with_box(),
             Point2::new(0.0, 0.0),
             Point2::new(4.0, 4.0),
@@ -504,7 +504,7 @@ mod tests {
 
     #[test]
     fn wire_round_trip_keeps_cells_and_refuses_bad_sizes() {
-        let map = TerrainMap::elevation_from_height_field(
+        let map = TerrainGrid::elevation_from_height_field(
             &flat_with_box(),
             Point2::new(0.5, 1.5),
             Point2::new(2.0, 3.0),
@@ -512,11 +512,11 @@ mod tests {
         )
         .unwrap();
         let wire = map.to_map_grid();
-        let back = TerrainMap::from_map_grid(&wire).unwrap();
+        let back = TerrainGrid::from_map_grid(&wire).unwrap();
         assert_eq!(back, map);
         let mut broken = wire.clone();
         broken.cells.pop();
-        let err = TerrainMap::from_map_grid(&broken).unwrap_err();
+        let err = TerrainGrid::from_map_grid(&broken).unwrap_err();
         assert!(
             err.to_string().contains("elevation map is malformed"),
             "{err}"
@@ -526,13 +526,13 @@ mod tests {
             value: f32::NAN,
             sigma_m: 0.0,
         };
-        let back = TerrainMap::from_map_grid(&nan).unwrap();
+        let back = TerrainGrid::from_map_grid(&nan).unwrap();
         assert_eq!(back.grid().cells()[0], MapValue::Unknown);
     }
 
     #[test]
     fn disc_maximum_is_conservative_and_sees_unknown_edges() {
-        let map = TerrainMap::elevation_from_height_field(
+        let map = TerrainGrid::elevation_from_height_field(
             &flat_with_box(),
             Point2::new(0.0, 0.0),
             Point2::new(4.0, 4.0),
@@ -561,7 +561,7 @@ mod tests {
             .unwrap(),
         )
         .unwrap();
-        let map = TerrainMap::elevation_from_height_field(
+        let map = TerrainGrid::elevation_from_height_field(
             &hf,
             Point2::new(0.3, 0.2),
             Point2::new(3.7, 2.8),
@@ -601,7 +601,7 @@ mod tests {
             ],
         )
         .unwrap();
-        let map = TerrainMap::new(MapKind::Elevation, grid);
+        let map = TerrainGrid::new(MapKind::Elevation, grid);
         let o = ObstacleHeights::new(&map, 2.0, 0.8);
         let (h, k) = o.max_in_disc(Point2::new(0.0, 0.0), 0.01);
         assert!((h - 0.2).abs() < 1e-12 && k, "{h} {k}");
