@@ -59,7 +59,7 @@ pub struct Handling {
     /// The envelope as delivered (sender = the asker; `node`, `context` as central set them).
     pub delivery: Envelope,
     /// What the handler sent, in order.
-    pub actions: Vec<Action>,
+    pub actions: Vec<ScriptAction>,
     /// How it ended; `None` if it never did (killed, or the log ends first).
     pub answer: Option<Answer>,
 }
@@ -74,7 +74,7 @@ impl Handling {
 
 /// A message the handler sent.
 #[derive(Clone, Debug)]
-pub struct Action {
+pub struct ScriptAction {
     /// Own (simulated) time spent before sending it.
     pub spend: Duration,
     /// The envelope as the module sent it.
@@ -319,7 +319,7 @@ pub fn module_script(log: &LogFile, module: &str) -> Option<ModuleScript> {
                             stamp: env.timestamp_ns,
                             reply_stamp: None,
                         });
-                        b.handling.actions.push(Action {
+                        b.handling.actions.push(ScriptAction {
                             spend: Duration::ZERO,
                             envelope: env,
                         });

@@ -13,7 +13,7 @@
 use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use tca_logs::script::{Action, AnswerOutcome, ModuleScript};
+use tca_logs::script::{AnswerOutcome, ModuleScript, ScriptAction};
 use tca_messages::control::ControlRequest;
 use tca_messages::{Class, ConstraintSpec, MessageId, NodeId, PointRef, TaskRef};
 use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
@@ -181,7 +181,12 @@ async fn play(
 }
 
 /// Sends one recorded message again, its ids mapped to live ones.
-async fn perform(ctx: &Context, action: &Action, script: &ModuleScript, state: &Mutex<State>) {
+async fn perform(
+    ctx: &Context,
+    action: &ScriptAction,
+    script: &ModuleScript,
+    state: &Mutex<State>,
+) {
     let env = &action.envelope;
     let name = env.name.as_str();
     let live_context = match env.context {
