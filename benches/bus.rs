@@ -32,11 +32,7 @@ fn runtime() -> Runtime {
 }
 
 fn free_endpoint() -> String {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .map(|a| a.port())
-        .expect("free port");
-    format!("tcp/127.0.0.1:{port}")
+    tca_link::zenoh::free_loopback_endpoint().expect("a free loopback port")
 }
 
 /// Baseline: a request/response over two tokio channels between two tasks.

@@ -115,7 +115,7 @@ async fn commands_are_handled_one_at_a_time_in_order() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_goal_handler_s_commands_become_its_children() {
-    let central = TestCentral::start(Transport::InProcess).await;
+    let central = TestCentral::start(TransportKind::InProcess).await;
     let moves = Arc::new(Mutex::new(Vec::new()));
     let _ctl = controller(&central, moves.clone()).await;
     let _planner = Module::builder("planner")
@@ -191,7 +191,7 @@ async fn a_registration_with_another_format_is_refused() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_query_times_out_with_an_error_not_a_hang() {
-    let central = TestCentral::start(Transport::InProcess).await;
+    let central = TestCentral::start(TransportKind::InProcess).await;
     let _slow = Module::builder("slow")
         .handle(|_ctx, _q: SlowQuery| async {
             tokio::time::sleep(Duration::from_secs(30)).await;
@@ -304,9 +304,9 @@ async fn messages_wait_for_a_crashed_module_and_reach_it_when_it_returns() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_module_process_killed_and_restarted_still_gets_what_waited() {
-    let central = TestCentral::start(Transport::Zenoh).await;
+    let central = TestCentral::start(TransportKind::Zenoh).await;
     let endpoint = central.endpoint.clone().unwrap();
-    let mut echo_proc = ChildProcess::spawn(&["module", "echo", "--connect", &endpoint]);
+    let mut echo_proc = spawn_tca(&["module", "echo", "--connect", &endpoint]);
     let pinger = Module::builder("pinger")
         .connect(&central.connector)
         .await
@@ -349,7 +349,7 @@ async fn a_module_process_killed_and_restarted_still_gets_what_waited() {
     };
     tokio::time::sleep(Duration::from_millis(300)).await;
     assert!(!waiting.is_finished());
-    let _echo_again = ChildProcess::spawn(&["module", "echo", "--connect", &endpoint]);
+    let _echo_again = spawn_tca(&["module", "echo", "--connect", &endpoint]);
     let pong = within("held query answered", waiting)
         .await
         .unwrap()
@@ -363,7 +363,7 @@ async fn the_log_is_readable_after_central_is_killed() {
     let dir = tempfile::tempdir().unwrap();
     let log = dir.path().join("traffic.mcap");
     let endpoint = free_endpoint();
-    let mut central = ChildProcess::spawn(&[
+    let mut central = spawn_tca(&[
         "central",
         "--listen",
         &endpoint,
@@ -420,7 +420,7 @@ async fn a_clean_log_records_everything_and_shows_it() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("t.mcap");
     let central = TestCentral::start_with(
-        Transport::InProcess,
+        TransportKind::InProcess,
         StartOptions {
             log: Some(path.clone()),
             ..StartOptions::default()

@@ -15,7 +15,7 @@ use common::*;
 const WALKING: [&str; 6] = ["controller", "ism", "ltm", "pdm", "lrp", "gait"];
 
 fn spawn_central(endpoint: &str, log: &std::path::Path) -> ChildProcess {
-    ChildProcess::spawn(&[
+    spawn_tca(&[
         "central",
         "--listen",
         endpoint,
@@ -34,7 +34,7 @@ fn spawn_module(name: &str, endpoint: &str, state: &std::path::Path) -> ChildPro
     if name == "ltm" {
         args.extend(["--state", state]);
     }
-    ChildProcess::spawn(&args)
+    spawn_tca(&args)
 }
 
 /// Body moves central has logged so far.

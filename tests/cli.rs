@@ -76,7 +76,7 @@ async fn up_starts_central_and_modules_that_the_other_commands_reach() {
         ),
     )
     .unwrap();
-    let mut up = ChildProcess::spawn(&["up", launch.to_str().unwrap()]);
+    let mut up = spawn_tca(&["up", launch.to_str().unwrap()]);
     // The echo module registers once it has started: poll the registry until it shows.
     let registry = retry("echo registered", || async {
         let out = tokio::task::spawn_blocking({

@@ -325,7 +325,7 @@ async fn bad_arguments_give_clear_errors() {
     // A log with no range images in it.
     let empty = dir.path().join("empty.mcap");
     let central = TestCentral::start_with(
-        Transport::InProcess,
+        TransportKind::InProcess,
         StartOptions {
             log: Some(empty.clone()),
             ..StartOptions::default()
@@ -354,7 +354,7 @@ async fn bad_arguments_give_clear_errors() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_running_system_draws_its_map_over_zenoh() {
-    let central = TestCentral::start(Transport::Zenoh).await;
+    let central = TestCentral::start(TransportKind::Zenoh).await;
     let endpoint = central.endpoint.clone().unwrap();
     let dir = tempfile::tempdir().unwrap();
     let run = |args: Vec<String>| async move {

@@ -246,7 +246,7 @@ async fn walk_on(
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("walk.mcap");
     let central = TestCentral::start_with(
-        Transport::InProcess,
+        TransportKind::InProcess,
         StartOptions {
             log: Some(path.clone()),
             ..StartOptions::default()
@@ -384,7 +384,7 @@ tca_messages::message!(Work: goal "work");
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn monitors_check_conditions_and_end_with_their_node() {
-    let central = TestCentral::start(Transport::InProcess).await;
+    let central = TestCentral::start(TransportKind::InProcess).await;
     let polls = Arc::new(AtomicU32::new(0));
     let alarms = Arc::new(Mutex::new(Vec::new()));
     let stops = Arc::new(AtomicU32::new(0));
@@ -472,7 +472,7 @@ async fn monitors_check_conditions_and_end_with_their_node() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_killed_tree_cancels_running_handlers_and_drops_waiting_ones() {
-    let central = TestCentral::start(Transport::InProcess).await;
+    let central = TestCentral::start(TransportKind::InProcess).await;
     let started = Arc::new(AtomicU32::new(0));
     let cancelled = Arc::new(AtomicU32::new(0));
     struct OnDrop(Arc<AtomicU32>);

@@ -20,7 +20,7 @@ async fn the_walk_runs_with_every_module_its_own_process() {
         .replace("\"3\"", "\"4\"");
     let file = dir.path().join("walk.toml");
     std::fs::write(&file, launch).unwrap();
-    let mut up = ChildProcess::spawn(&["up", file.to_str().unwrap()]);
+    let mut up = spawn_tca(&["up", file.to_str().unwrap()]);
     // Wait until all six modules have registered.
     retry("the walking modules registered", || async {
         let e = endpoint.clone();

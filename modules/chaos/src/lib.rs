@@ -138,7 +138,7 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
     tca_logs::set_aside(&log).context("cannot keep the previous log")?;
     let endpoint = match &options.listen {
         Some(e) => e.clone(),
-        None => format!("tcp/127.0.0.1:{}", free_port()?),
+        None => tca_link::zenoh::free_loopback_endpoint().context("no free loopback port")?,
     };
     let central = tca_central::start(StartOptions {
         log: Some(log.clone()),
@@ -379,12 +379,6 @@ async fn wait_until(
         }
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
-}
-
-fn free_port() -> anyhow::Result<u16> {
-    Ok(std::net::TcpListener::bind("127.0.0.1:0")?
-        .local_addr()?
-        .port())
 }
 
 /// A readable summary of an audit.

@@ -1,18 +1,12 @@
 //! Handlers and sends by name and encoded data (for tools that stand in for modules they were
 //! not compiled with, like `tca log replay`), through an in-process central.
 
-use std::time::Duration;
+use tca_testkit::within;
 
 use tca_central::StartOptions;
 use tca_messages::control::{Registration, TaskOutcome};
 use tca_messages::{Class, DataFormat, MessageName, decode_data, encode_data};
 use tca_module::{Connector, HandlerError, Module, ModuleError};
-
-async fn within<T>(f: impl std::future::Future<Output = T>) -> T {
-    tokio::time::timeout(Duration::from_secs(10), f)
-        .await
-        .expect("timed out")
-}
 
 fn registration(name: &str, class: Class, reply: Option<DataFormat>) -> Registration {
     Registration {
@@ -31,6 +25,7 @@ async fn raw_handlers_answer_raw_sends_and_see_who_asked() {
     let (seen_tx, mut seen_rx) = tokio::sync::mpsc::unbounded_channel();
     let seen = seen_tx.clone();
     let _doubler = within(
+        "raw",
         Module::builder("doubler")
             .handle_raw(
                 registration(
@@ -57,13 +52,16 @@ async fn raw_handlers_answer_raw_sends_and_see_who_asked() {
     )
     .await
     .unwrap();
-    let asker = within(Module::builder("asker").connect(&connector))
+    let asker = within("raw", Module::builder("asker").connect(&connector))
         .await
         .unwrap();
 
-    let reply = within(asker.query_raw("double", encode_data(&21u32).unwrap(), None))
-        .await
-        .unwrap();
+    let reply = within(
+        "raw",
+        asker.query_raw("double", encode_data(&21u32).unwrap(), None),
+    )
+    .await
+    .unwrap();
     assert_eq!(decode_data::<u32>(&reply).unwrap(), 42);
     assert_eq!(
         seen_rx.recv().await.unwrap(),
@@ -73,7 +71,7 @@ async fn raw_handlers_answer_raw_sends_and_see_who_asked() {
     let task = asker
         .send_watched_raw(Class::Goal, "refuse", encode_data(&1u32).unwrap(), [])
         .unwrap();
-    match within(task.outcome()).await.unwrap() {
+    match within("raw", task.outcome()).await.unwrap() {
         TaskOutcome::Failed(reason) => assert!(reason.contains("refused on purpose"), "{reason}"),
         other => panic!("expected a failure, got {other:?}"),
     }
@@ -100,6 +98,7 @@ async fn raw_registrations_are_checked_before_connecting() {
     let connector = Connector::from(central.in_process());
     // A query without a reply format.
     let err = within(
+        "raw",
         Module::builder("bad")
             .handle_raw(
                 registration("ask", Class::Query, None),
@@ -112,6 +111,7 @@ async fn raw_registrations_are_checked_before_connecting() {
     assert!(err.to_string().contains("reply format"), "{err}");
     // A class nobody handles.
     let err = within(
+        "raw",
         Module::builder("bad2")
             .handle_raw(
                 registration("r", Class::Reply, None),

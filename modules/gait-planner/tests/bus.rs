@@ -5,9 +5,8 @@
 
 mod common;
 
-use std::future::Future;
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use tca_testkit::within;
 
 use nalgebra::Point2;
 use tca_central::{RunningCentral, StartOptions};
@@ -22,15 +21,6 @@ use tca_single_leg_messages::{
     MapKind, MapRegion, PlanStep, StepPlanned, WorldPoint,
 };
 use tokio::sync::mpsc;
-
-const STEP: Duration = Duration::from_secs(60);
-
-async fn within<T>(what: &str, f: impl Future<Output = T>) -> T {
-    match tokio::time::timeout(STEP, f).await {
-        Ok(v) => v,
-        Err(_) => panic!("timed out after {STEP:?}: {what}"),
-    }
-}
 
 /// What the fake Controller executed, in order.
 #[derive(Debug, Clone, PartialEq)]

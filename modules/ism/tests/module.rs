@@ -1,8 +1,7 @@
 //! The ISM module on an in-process central, with a fake Controller answering `bodyPosition`.
 
-use std::future::Future;
 use std::sync::Arc;
-use std::time::Duration;
+use tca_testkit::within;
 
 use nalgebra::Point2;
 use tca_central::StartOptions;
@@ -11,12 +10,6 @@ use tca_ism::{ImageFrames, IsmConfig, SensorSpec, StoredSequence, VirtualScanner
 use tca_module::{Connector, Module};
 use tca_robot::{CarriagePose, HeightField, LegParams};
 use tca_single_leg_messages::{AcquireImage, BodyPose, BodyPosition, SensorKind};
-
-async fn within<T>(what: &str, f: impl Future<Output = T>) -> T {
-    tokio::time::timeout(Duration::from_secs(60), f)
-        .await
-        .unwrap_or_else(|_| panic!("timed out: {what}"))
-}
 
 fn flat() -> Arc<HeightField> {
     Arc::new(HeightField::flat(Point2::new(-5.0, -5.0), Point2::new(12.0, 25.0), 0.1, 0.0).unwrap())

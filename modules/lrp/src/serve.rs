@@ -48,8 +48,9 @@ pub struct LrpConfig {
     pub simulated_time: bool,
     /// What planning a leg move (`recoverLeg`) charges to simulated time: the measured
     /// computing time, or a modeled one (the 1990 LRP took about 12 s a step, §7.2).
-    /// Reachability queries always charge what they measure.
     pub compute_time: ComputeTime,
+    /// What a reachability map (`legReachability`) charges to simulated time.
+    pub reachability_compute_time: ComputeTime,
 }
 
 impl Default for LrpConfig {
@@ -62,6 +63,7 @@ impl Default for LrpConfig {
             picture_dir: None,
             simulated_time: false,
             compute_time: ComputeTime::Measured,
+            reachability_compute_time: ComputeTime::Measured,
         }
     }
 }
@@ -75,20 +77,21 @@ struct Shared {
     picture_dir: Option<PathBuf>,
     pictures: Arc<AtomicU64>,
     compute_time: ComputeTime,
+    reachability_compute_time: ComputeTime,
 }
 
 /// Connects the Leg Recovery Planner to central under `config.module_name` and serves
 /// [`RecoverLeg`] and [`LegReachability`] until the returned [`Module`] is dropped or
-/// closed. Bad parameters are a [`ModuleError::Usage`] saying what to fix.
+/// closed. Bad parameters are a [`ModuleError::Config`] saying what to fix.
 pub async fn connect(connector: &Connector, config: LrpConfig) -> Result<Module, ModuleError> {
     if !(config.map_resolution_m.is_finite() && config.map_resolution_m > 0.0) {
-        return Err(ModuleError::Usage(format!(
+        return Err(ModuleError::Config(format!(
             "lrp map resolution {} m must be a finite number above 0",
             config.map_resolution_m
         )));
     }
     let planner = LegRecoveryPlanner::new(config.leg.clone(), config.params)
-        .map_err(|e| ModuleError::Usage(format!("lrp configuration: {e}")))?;
+        .map_err(|e| ModuleError::Config(format!("lrp configuration: {e}")))?;
     let shared = Shared {
         planner: Arc::new(planner),
         kin: Arc::new(LegKinematics::new(&config.leg)),
@@ -96,6 +99,7 @@ pub async fn connect(connector: &Connector, config: LrpConfig) -> Result<Module,
         picture_dir: config.picture_dir.clone(),
         pictures: Arc::new(AtomicU64::new(0)),
         compute_time: config.compute_time,
+        reachability_compute_time: config.reachability_compute_time,
     };
     tracing::info!(module = %config.module_name, "leg recovery planner starting");
     Module::builder(config.module_name.clone())
@@ -237,7 +241,7 @@ impl Shared {
         .await
         .map_err(|e| HandlerError::new(format!("the reachability task ended abnormally: {e}")))?;
         if ctx.simulated_time() {
-            ctx.spend(began.elapsed());
+            ctx.spend(self.reachability_compute_time.charged(began.elapsed()));
         }
         Ok(answer?)
     }

@@ -5,9 +5,8 @@
 
 mod common;
 
-use std::future::Future;
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use tca_testkit::within;
 
 use common::footfall;
 use nalgebra::Point2;
@@ -24,15 +23,6 @@ use tca_single_leg_messages::{
     WorldPoint,
 };
 use tokio::sync::mpsc;
-
-const STEP: Duration = Duration::from_secs(30);
-
-async fn within<T>(what: &str, f: impl Future<Output = T>) -> T {
-    match tokio::time::timeout(STEP, f).await {
-        Ok(v) => v,
-        Err(_) => panic!("timed out after {STEP:?}: {what}"),
-    }
-}
 
 /// A goal for the test's walker: send `recoverLeg` as a child and handle its exceptions.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use nalgebra::Point2;
 use tca_ism::ImageFrames;
+use tca_module::ComputeTime;
 use tca_single_leg_messages::{MapGrid, MapKind, MapRegion, RangeImage, SensorKind};
 
 use crate::builder::{BuilderConfig, build_map};
@@ -38,9 +39,12 @@ pub struct LtmConfig {
     pub cache_cells: usize,
     /// The sensor the module asks the ISM for when it needs an image.
     pub sensor: SensorKind,
-    /// Stamp the module's messages with simulated time, charging each query the wall-clock
-    /// time its map building and answering took.
+    /// Stamp the module's messages with simulated time, charging each query what
+    /// `compute_time` says for its map building and answering.
     pub simulated_time: bool,
+    /// What a `mapRegion` charges to simulated time: what it measured, or a model per image
+    /// cell merged and map cell computed (`ComputeTime::PerUnit`).
+    pub compute_time: ComputeTime,
 }
 
 impl Default for LtmConfig {
@@ -56,6 +60,7 @@ impl Default for LtmConfig {
             cache_cells: 8 << 20,
             sensor: SensorKind::Erim,
             simulated_time: false,
+            compute_time: ComputeTime::Measured,
         }
     }
 }

@@ -9,14 +9,14 @@
 
 use std::sync::{Arc, Mutex};
 
-use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
+use tca_module::{ComputeTime, Connector, Context, HandlerError, Module, ModuleError};
 use tca_single_leg_messages::{AcquireImage, MapGrid, MapRegion};
 
 use crate::manager::{LocalTerrainMap, LtmConfig};
 
 /// Connects the LTM Manager module (`"ltm"`) with an empty map and serves `mapRegion`.
 pub async fn connect(connector: &Connector, config: LtmConfig) -> Result<Module, ModuleError> {
-    let map = LocalTerrainMap::new(config).map_err(|e| ModuleError::Usage(e.to_string()))?;
+    let map = LocalTerrainMap::new(config).map_err(|e| ModuleError::Config(e.to_string()))?;
     connect_with_map(connector, map).await
 }
 
@@ -27,6 +27,7 @@ pub async fn connect_with_map(
     map: LocalTerrainMap,
 ) -> Result<Module, ModuleError> {
     let simulated_time = map.config().simulated_time;
+    let compute_time = map.config().compute_time;
     let map = Arc::new(Mutex::new(map));
     Module::builder("ltm")
         .simulated_time(simulated_time)
@@ -34,7 +35,7 @@ pub async fn connect_with_map(
         .requery_after_crash(tca_module::REQUERIES_AFTER_CRASH)
         .handle(move |ctx, request: MapRegion| {
             let map = map.clone();
-            async move { map_region(&ctx, map, request).await }
+            async move { map_region(&ctx, map, request, compute_time).await }
         })
         .connect(connector)
         .await
@@ -51,6 +52,7 @@ async fn map_region(
     ctx: &Context,
     map: Arc<Mutex<LocalTerrainMap>>,
     request: MapRegion,
+    compute_time: ComputeTime,
 ) -> Result<MapGrid, HandlerError> {
     let (needs_image, sensor) = {
         let map = lock(&map)?;
@@ -61,6 +63,8 @@ async fn map_region(
         )
     };
     let mut computing = std::time::Duration::ZERO;
+    // Work done, for a modelled charge: image cells merged and map cells computed.
+    let mut work = 0u64;
     if needs_image {
         let image = ctx.query(&AcquireImage { sensor }).await?;
         let map = map.clone();
@@ -78,17 +82,24 @@ async fn map_region(
         .await
         .map_err(|e| HandlerError::new(format!("map building did not finish: {e}")))??;
         computing += began.elapsed();
+        work += (report.known + report.occluded) as u64;
         tracing::debug!(
             changed = report.cells_changed,
             "new image merged for a query"
         );
     }
     let began = std::time::Instant::now();
-    let answer = tokio::task::spawn_blocking(move || {
-        lock(&map)?.query(&request).map_err(HandlerError::from)
+    let (answer, computed) = tokio::task::spawn_blocking(move || {
+        let mut map = lock(&map)?;
+        let before = map.cache_stats().computed;
+        let answer = map.query(&request).map_err(HandlerError::from);
+        let computed = map.cache_stats().computed.saturating_sub(before);
+        Ok::<_, HandlerError>((answer, computed))
     })
     .await
-    .map_err(|e| HandlerError::new(format!("the query did not finish: {e}")))?;
-    ctx.spend(computing + began.elapsed());
+    .map_err(|e| HandlerError::new(format!("the query did not finish: {e}")))??;
+    computing += began.elapsed();
+    work += computed;
+    ctx.spend(compute_time.charged_for(computing, work));
     answer
 }

@@ -3,10 +3,9 @@
 
 mod common;
 
-use std::future::Future;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::Duration;
+use tca_testkit::within;
 
 use common::{BOX, params, rect, terrain};
 use tca_central::StartOptions;
@@ -14,12 +13,6 @@ use tca_ism::{IsmConfig, SensorSpec, VirtualScanner};
 use tca_ltm::LtmConfig;
 use tca_module::{Connector, Module};
 use tca_single_leg_messages::{BodyPose, BodyPosition, MapCell, MapKind, MapRegion};
-
-async fn within<T>(what: &str, f: impl Future<Output = T>) -> T {
-    tokio::time::timeout(Duration::from_secs(60), f)
-        .await
-        .unwrap_or_else(|_| panic!("timed out: {what}"))
-}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn map_region_takes_an_image_when_it_has_none_or_is_asked_to() {

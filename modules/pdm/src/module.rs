@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use tca_module::{Connector, HandlerError, Module, ModuleError};
+use tca_module::{ComputeTime, Connector, HandlerError, Module, ModuleError};
 use tca_single_leg_messages::RenderMap;
 
 use crate::error::{PdmError, Result};
@@ -20,8 +20,10 @@ pub struct PdmConfig {
     /// working directory).
     pub output_dir: Option<PathBuf>,
     /// Stamp messages with simulated time (run with a simulated Controller) and charge the
-    /// drawing's measured time to it.
+    /// drawing to it as `compute_time` says.
     pub simulated_time: bool,
+    /// What drawing a picture charges to simulated time.
+    pub compute_time: ComputeTime,
 }
 
 impl PdmConfig {
@@ -39,6 +41,7 @@ impl PdmConfig {
 pub async fn connect(connector: &Connector, config: PdmConfig) -> Result<Module, ModuleError> {
     let config = Arc::new(config);
     let simulated_time = config.simulated_time;
+    let compute_time = config.compute_time;
     Module::builder("pdm")
         .simulated_time(simulated_time)
         // A module that dies while answering one of our queries is restarted; ask again.
@@ -52,7 +55,7 @@ pub async fn connect(connector: &Connector, config: PdmConfig) -> Result<Module,
                     .await
                     .map_err(HandlerError::from)?;
                 if simulated_time {
-                    ctx.spend(began.elapsed());
+                    ctx.spend(compute_time.charged(began.elapsed()));
                 }
                 tracing::info!(path = %path.display(), kind = ?request.region.kind, "map drawn");
                 Ok(())

@@ -1,9 +1,8 @@
 //! The PDM module on an in-process central with the real LTM Manager and ISM modules and a
 //! fake Controller: `renderMap` writes a picture; failures end the command with a reason.
 
-use std::future::Future;
 use std::sync::Arc;
-use std::time::Duration;
+use tca_testkit::within;
 
 use nalgebra::Point2;
 use tca_central::StartOptions;
@@ -16,12 +15,6 @@ use tca_robot::{HeightField, LegParams};
 use tca_single_leg_messages::{
     BodyPose, BodyPosition, MapKind, MapRegion, Overlay, PlanePoint, RenderMap, WorldPoint,
 };
-
-async fn within<T>(what: &str, f: impl Future<Output = T>) -> T {
-    tokio::time::timeout(Duration::from_secs(60), f)
-        .await
-        .unwrap_or_else(|_| panic!("timed out: {what}"))
-}
 
 fn region(kind: MapKind) -> MapRegion {
     MapRegion {

@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 
 use tca_controller_sim::{ControllerConfig, SpeedFactor};
 use tca_gait_planner::GaitConfig;
@@ -62,21 +63,51 @@ impl ComputeModel {
     /// Simulated seconds the Leg Recovery Planner charges per leg move under
     /// [`ComputeModel::Paper`].
     pub const PAPER_LRP_S: u64 = 12;
+    /// Simulated seconds the Leg Recovery Planner charges per reachability map under
+    /// [`ComputeModel::Paper`] (the report gives no figure of its own for it).
+    pub const PAPER_REACHABILITY_S: u64 = 1;
+    /// What the LTM Manager charges under [`ComputeModel::Paper`] for any `mapRegion`, ms.
+    pub const PAPER_LTM_BASE_MS: u64 = 500;
+    /// What the LTM Manager charges under [`ComputeModel::Paper`] per image cell merged and
+    /// per map cell computed (a cached cell costs nothing), µs.
+    pub const PAPER_LTM_PER_CELL_US: u64 = 20;
+    /// Simulated seconds the PDM charges per picture under [`ComputeModel::Paper`].
+    pub const PAPER_PDM_S: u64 = 1;
 
-    fn gait(self) -> ComputeTime {
+    fn fixed(self, seconds: u64) -> ComputeTime {
         match self {
-            ComputeModel::Paper => {
-                ComputeTime::Modeled(std::time::Duration::from_secs(Self::PAPER_GAIT_S))
-            }
+            ComputeModel::Paper => ComputeTime::Modeled(Duration::from_secs(seconds)),
             ComputeModel::Measured => ComputeTime::Measured,
         }
     }
 
-    fn lrp(self) -> ComputeTime {
+    /// What the Gait Planner charges per step.
+    pub fn gait(self) -> ComputeTime {
+        self.fixed(Self::PAPER_GAIT_S)
+    }
+
+    /// What the Leg Recovery Planner charges per leg move.
+    pub fn lrp(self) -> ComputeTime {
+        self.fixed(Self::PAPER_LRP_S)
+    }
+
+    /// What the Leg Recovery Planner charges per reachability map.
+    pub fn reachability(self) -> ComputeTime {
+        self.fixed(Self::PAPER_REACHABILITY_S)
+    }
+
+    /// What the PDM charges per picture.
+    pub fn pdm(self) -> ComputeTime {
+        self.fixed(Self::PAPER_PDM_S)
+    }
+
+    /// What the LTM Manager charges per `mapRegion`.
+    pub fn ltm(self) -> ComputeTime {
         match self {
-            ComputeModel::Paper => {
-                ComputeTime::Modeled(std::time::Duration::from_secs(Self::PAPER_LRP_S))
-            }
+            ComputeModel::Paper => ComputeTime::PerUnit {
+                base: Duration::from_millis(Self::PAPER_LTM_BASE_MS),
+                per_unit: Duration::from_micros(Self::PAPER_LTM_PER_CELL_US),
+            },
             ComputeModel::Measured => ComputeTime::Measured,
         }
     }
@@ -140,6 +171,7 @@ pub async fn connect_module(
                 simulated_time: true,
                 sensor: tca_single_leg_messages::SensorKind::Perceptron,
                 store_dir: setup.state_dir.as_ref().map(|d| d.join("ltm-tiles")),
+                compute_time: setup.compute.ltm(),
                 ..LtmConfig::default()
             };
             tca_ltm::connect(connector, config).await
@@ -148,6 +180,7 @@ pub async fn connect_module(
             let config = PdmConfig {
                 output_dir: setup.out.clone(),
                 simulated_time: true,
+                compute_time: setup.compute.pdm(),
                 ..PdmConfig::default()
             };
             tca_pdm::connect(connector, config).await
@@ -157,6 +190,7 @@ pub async fn connect_module(
                 picture_dir: setup.steps_dir(),
                 simulated_time: true,
                 compute_time: setup.compute.lrp(),
+                reachability_compute_time: setup.compute.reachability(),
                 ..LrpConfig::default()
             };
             tca_lrp::connect(connector, config).await

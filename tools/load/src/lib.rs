@@ -221,11 +221,7 @@ pub async fn run(options: &LoadOptions, log_dir: &Path) -> anyhow::Result<LoadRe
 
 /// A zenoh endpoint on a free loopback port.
 fn free_endpoint() -> anyhow::Result<String> {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .and_then(|l| l.local_addr())
-        .context("no free loopback port")?
-        .port();
-    Ok(format!("tcp/127.0.0.1:{port}"))
+    tca_link::zenoh::free_loopback_endpoint().context("no free loopback port")
 }
 
 /// Connects the modules, a few at a time, each handling its query, goal and inform.

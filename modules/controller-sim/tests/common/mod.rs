@@ -4,12 +4,8 @@
 
 #![allow(dead_code, unreachable_pub)]
 
-use std::future::Future;
-use std::time::Duration;
-
 use nalgebra::{Point2, Point3};
 use serde::{Deserialize, Serialize};
-use tca_central::{RunningCentral, StartOptions};
 use tca_controller_sim::sim::StartPose;
 use tca_controller_sim::{ControllerConfig, SpeedFactor};
 use tca_messages::NodeId;
@@ -19,28 +15,7 @@ use tca_robot::{CarriagePose, ElbowBranch, HeightField, LegKinematics, LegParams
 use tca_single_leg_messages::{BodyMove, HardwareFault, LegMove, MoveFailed, SetTransForce};
 use tokio::sync::mpsc;
 
-/// Every await in a test is bounded by this.
-pub const STEP: Duration = Duration::from_secs(20);
-
-/// Awaits `f`, failing the test if it takes longer than [`STEP`].
-pub async fn within<T>(what: &str, f: impl Future<Output = T>) -> T {
-    match tokio::time::timeout(STEP, f).await {
-        Ok(v) => v,
-        Err(_) => panic!("timed out after {STEP:?}: {what}"),
-    }
-}
-
-/// Central in this process, and the connector to it.
-pub async fn central() -> (RunningCentral, Connector) {
-    let central = within(
-        "central starts",
-        tca_central::start(StartOptions::default()),
-    )
-    .await
-    .expect("central starts");
-    let connector = Connector::from(central.in_process());
-    (central, connector)
-}
+pub use tca_testkit::{in_process_central as central, within};
 
 /// A command for the Controller, sent by the client's [`Attempt`] goal.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
