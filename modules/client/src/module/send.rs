@@ -176,7 +176,8 @@ impl Module {
     ) -> Result<WatchedTask> {
         if !class.is_task() {
             return Err(ModuleError::Usage(format!(
-                "{name} is a {class}: only goals and commands have an outcome to watch"
+                "{name} is a {class}, not a goal or command: notification and constraints \
+                 apply to goals and commands only"
             )));
         }
         let (task, outcome) = self.send_task_raw(class, name, data, constraints, true)?;
