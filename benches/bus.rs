@@ -32,7 +32,7 @@ fn runtime() -> Runtime {
 }
 
 fn free_endpoint() -> String {
-    tca_link::zenoh::free_loopback_endpoint().expect("a free loopback port")
+    tca_link::net::free_loopback_endpoint().expect("a free loopback port")
 }
 
 /// Baseline: a request/response over two tokio channels between two tasks.

@@ -1,4 +1,4 @@
-//! Central killed with `kill -9` in the middle of a walk (issue 8 item 2): the walking modules
+//! Central killed with `kill -9` in the middle of a walk: the walking modules
 //! are separate processes over zenoh. The log of the crashed central is readable; the walk
 //! command fails with a message saying how to resume; a new central on the same endpoint keeps
 //! the crashed one's log (as `traffic.1.mcap`) and every module registers with it by itself;

@@ -1,4 +1,4 @@
-//! Crash-proof walking (issue 8 item 1): `tca chaos` walks course 3 with the walking modules as
+//! Crash-proof walking: `tca chaos` walks course 3 with the walking modules as
 //! separate processes over zenoh while random modules are killed with SIGKILL and started
 //! again. Every walk reaches its goal without a collision, and the audit of central's log finds
 //! no message lost and none handled twice (`tca log audit` agrees). The stateful modules (the

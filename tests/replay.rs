@@ -170,7 +170,7 @@ fn logs_that_cannot_be_replayed_are_refused_clearly() {
     // Cut right after the header: no walk at all.
     let stub = dir.path().join("stub.mcap");
     std::fs::write(&stub, &bytes[..40.min(bytes.len())]).unwrap();
-    assert_refused(&replay(&stub, &[]), "not the log of a walk");
+    assert_refused(&replay(&stub, &[]), "holds no `walk` goal");
     // Not a log.
     let junk = dir.path().join("junk.mcap");
     std::fs::write(&junk, b"this is not a traffic log").unwrap();
@@ -182,7 +182,7 @@ fn logs_that_cannot_be_replayed_are_refused_clearly() {
     }
     let broken = dir.path().join("broken.mcap");
     std::fs::write(&broken, damaged).unwrap();
-    assert_refused(&replay(&broken, &[]), "not the log of a walk");
+    assert_refused(&replay(&broken, &[]), "holds no `walk` goal");
     // A module the log does not hold, and a live module without its terrain.
     let out = tca(&["log", "replay", log.to_str().unwrap(), "--as", "controler"]);
     assert_refused(&out, "no module controler");

@@ -2,7 +2,7 @@
 //! feeds one channel, and the driver carries out the actions (send, log, close).
 //!
 //! The driver never waits for a link: frames for a link go into its outbox (see
-//! [`crate::outbox`]), whose level the driver measures when the core asks and reports when a
+//! `tca_link::outbox`), whose level the driver measures when the core asks and reports when a
 //! watched one drains; the core decides what a slow module gets. Nor does it wait for the log
 //! writer: while that is `max_log_backlog` records behind, frames stay in the inboxes.
 

@@ -20,6 +20,7 @@
 //! - [`hub`]: [`Hub`], how the queues wake whoever drives them (central's driver).
 //! - [`inproc`]: the in-process transport: [`InProcTransport`], [`InProcLink`],
 //!   [`InProcSender`].
+//! - [`net`]: free loopback ports and endpoints.
 //! - [`zenoh`](mod@zenoh): the zenoh key scheme and liveliness tokens, router and client
 //!   configuration, the zenoh login, and [`ZenohTransport`], a module's client side.
 //! - [`error`](mod@error): [`LinkError`].
@@ -28,6 +29,7 @@ pub mod error;
 pub mod hub;
 pub mod inbox;
 pub mod inproc;
+pub mod net;
 pub mod outbox;
 pub mod transport;
 pub mod zenoh;

@@ -50,6 +50,33 @@ pub struct Audit {
 }
 
 impl Audit {
+    /// A readable summary: what was counted, then every message lost or handled twice.
+    pub fn text(&self) -> String {
+        let mut s = format!(
+            "{} queries, {} goals and commands, {} informs, {} exceptions; {} refused with an \
+             error; {} tasks delivered again after their module went down ({} links closed)\n",
+            self.queries,
+            self.tasks,
+            self.informs,
+            self.exceptions,
+            self.refused,
+            self.redelivered,
+            self.links_closed
+        );
+        if self.is_clean() {
+            s.push_str("no message lost, none handled twice\n");
+        }
+        for l in &self.lost {
+            s.push_str(&format!("LOST: {l}\n"));
+        }
+        for d in &self.handled_twice {
+            s.push_str(&format!("HANDLED TWICE: {d}\n"));
+        }
+        s
+    }
+}
+
+impl Audit {
     /// Nothing lost and nothing handled twice.
     pub fn is_clean(&self) -> bool {
         self.lost.is_empty() && self.handled_twice.is_empty()

@@ -23,8 +23,8 @@
 //!
 //! The rules belong to the vocabulary being compared: whoever knows the messages gives them.
 //!
-//! Floats are compared exactly (NaN equals NaN): the planners are deterministic given identical
-//! inputs, so any change is a divergence.
+//! Floats are compared exactly (NaN equals NaN): a module that is deterministic given identical
+//! inputs sends identical data, so any change is a divergence.
 
 use std::collections::{BTreeMap, HashMap};
 use std::fmt;
@@ -185,7 +185,7 @@ pub fn streams(log: &LogFile, window: Range<usize>) -> BTreeMap<StreamKey, Vec<S
 pub enum Difference {
     /// A field's value.
     Field {
-        /// Field path (`footfall.x_m`, `cells[12]`; empty for the whole data).
+        /// Field path (`target.x_m`, `cells[12]`; empty for the whole data).
         path: String,
         /// Recorded value.
         recorded: String,

@@ -46,7 +46,7 @@ pub use envelope::{
 pub use error::{CodecError, FormatError, NameError};
 pub use format::DataFormat;
 pub use id::{MAX_NAME_LEN, MessageId, MessageName, ModuleName};
-pub use message::{Message, kind};
+pub use message::{Message, class_of, kind};
 pub use route_error::RouteError;
 pub use sim_time::{HandlingClock, SIMULATED_TIME_BELOW_NS, is_simulated_stamp};
 pub use value::Value;

@@ -26,7 +26,7 @@ pub mod kind {
     }
 
     /// Goals and commands: the classes that become task-tree nodes.
-    pub trait Task: Kind {}
+    pub trait TaskClass: Kind {}
 
     /// Goals, commands and informs: what a monitor may send when its condition holds.
     pub trait MonitorSend: Kind {}
@@ -56,8 +56,8 @@ pub mod kind {
         Exception
     );
 
-    impl Task for Goal {}
-    impl Task for Command {}
+    impl TaskClass for Goal {}
+    impl TaskClass for Command {}
     impl MonitorSend for Goal {}
     impl MonitorSend for Command {}
     impl MonitorSend for Inform {}
@@ -78,18 +78,17 @@ pub mod kind {
 /// pub struct Position { pub at_m: f64 }
 /// tca_messages::message!(BasePosition: query "basePosition" -> Position);
 ///
-/// use tca_messages::{Class, Message};
+/// use tca_messages::{Class, Message, class_of};
 /// assert_eq!(MoveBase::NAME, "moveBase");
-/// assert_eq!(<BasePosition as Message>::CLASS, Class::Query);
+/// assert_eq!(class_of::<BasePosition>(), Class::Query);
 /// ```
 pub trait Message: Serialize + DeserializeOwned + Send + Sync + 'static {
     /// The name central routes by.
     const NAME: &'static str;
     /// The class as a type: [`kind::Query`], [`kind::Goal`], [`kind::Command`],
-    /// [`kind::Inform`] or [`kind::Exception`].
+    /// [`kind::Inform`] or [`kind::Exception`]. The class on the wire is always this one's
+    /// ([`class_of`]).
     type Kind: kind::Kind;
-    /// The class: query, goal, command, inform or exception.
-    const CLASS: Class = <Self::Kind as kind::Kind>::CLASS;
     /// What a query's handler answers with; `()` for the other classes.
     type Reply: Serialize + DeserializeOwned + Send + 'static;
 
@@ -100,12 +99,17 @@ pub trait Message: Serialize + DeserializeOwned + Send + Sync + 'static {
 
     /// The data format of the reply (queries only).
     fn reply_format() -> Result<Option<DataFormat>, FormatError> {
-        if Self::CLASS == Class::Query {
+        if class_of::<Self>() == Class::Query {
             DataFormat::of::<Self::Reply>().map(Some)
         } else {
             Ok(None)
         }
     }
+}
+
+/// The class of message type `M`: the one its [`Message::Kind`] names.
+pub fn class_of<M: Message>() -> Class {
+    <M::Kind as kind::Kind>::CLASS
 }
 
 /// Declares a type as a [`Message`]: `message!(Type: class "name")`, and for queries

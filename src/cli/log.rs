@@ -95,7 +95,7 @@ pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
             if args.json {
                 println!("{}", serde_json::to_string(&audit)?);
             } else {
-                print!("{}", tca_chaos::audit_text(&audit));
+                print!("{}", audit.text());
                 if let Some(t) = &log.truncated {
                     println!(
                         "note: the log ends early ({t}); messages in flight then show as lost"

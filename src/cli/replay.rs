@@ -54,16 +54,16 @@ pub(crate) struct ReplayArgs {
 /// printed here, not passed up, so that it keeps its own status).
 pub(crate) async fn run(args: ReplayArgs) -> anyhow::Result<ExitCode> {
     let terrain = match (&args.terrain, args.course.as_deref()) {
-        (Some(path), _) => Some(TerrainChoice::File(path.clone())),
         (None, None) => None,
-        (None, Some("random")) => Some(TerrainChoice::Random(args.seed)),
-        (None, Some(n)) => match n.parse::<u32>() {
-            Ok(n @ 1..=4) => Some(TerrainChoice::Course(n)),
-            _ => {
-                eprintln!("error: --course must be 1, 2, 3, 4 or random (got {n:?})");
-                return Ok(ExitCode::from(2));
+        (file, course) => {
+            match TerrainChoice::from_args(course.unwrap_or("3"), file.as_deref(), args.seed) {
+                Ok(t) => Some(t),
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return Ok(ExitCode::from(2));
+                }
             }
-        },
+        }
     };
     let options = WalkReplayOptions {
         log: args.file,

@@ -1,7 +1,7 @@
 //! TCA task trees and temporal constraints: pure bookkeeping, no I/O.
 //!
 //! The central control process (crate `tca-central`) records every goal, command and
-//! query as a node of a task tree (paper 003 §3.2, Figure 5), asks this crate which nodes
+//! query as a node of a task tree (the report, §3.2, Figure 5), asks this crate which nodes
 //! may be dispatched, and reports handlers starting and ending. The tree enforces the
 //! temporal constraints between nodes, propagates completion and failure, and gives
 //! central the tools to handle exceptions. It reads no clock (every call carries the
@@ -61,10 +61,10 @@
 //!   started, holds. Starting a node's achievement starts its ancestors' too.
 //! - **Achievement end**: the node is achieved.
 //!
-//! *Change from the brief:* the brief started a command-less goal's achievement when the
-//! goal is achieved. That makes the point depend on the goal's own completion, a hidden
-//! ordering the cycle check cannot see: `start(achieve g) <= end(handle g)` was acyclic yet
-//! deadlocked. Starting it when the goal's handler finishes (if nothing below started it
+//! *Why not when the goal is achieved:* starting a command-less goal's achievement when the
+//! goal is achieved makes the point depend on the goal's own completion, a hidden ordering
+//! the cycle check cannot see: `start(achieve g) <= end(handle g)` is acyclic yet would
+//! deadlock. Starting it when the goal's handler finishes (if nothing below started it
 //! earlier) keeps every dependency of every point visible to the cycle check, so an
 //! accepted plan never deadlocks (the property tests check this).
 //!
@@ -145,7 +145,7 @@
 //! [`TreeOp`]; [`TaskTree::apply`] replays ops into a fresh tree and reproduces the same
 //! ids, states and events.
 //!
-//! # Changes from the brief, and why
+//! # Choices, and why
 //!
 //! - A goal's achievement starts when its handler finishes if nothing below it started
 //!   it earlier (not when the goal is achieved): see *Time points*. Without this, some

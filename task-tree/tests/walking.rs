@@ -1,4 +1,4 @@
-//! The walking task tree of Figure 5 (paper 003 §3.2–§3.3), sequential and concurrent,
+//! The walking task tree of Figure 5 (the report, §3.2–§3.3), sequential and concurrent,
 //! its replay, and its memory over long runs.
 
 mod common;

@@ -50,15 +50,6 @@ pub fn alive_key(zid: &str) -> String {
     format!("tca/alive/{zid}")
 }
 
-/// A TCP endpoint on a loopback port that is free now (for tests, benchmarks and tools that
-/// start a central of their own), e.g. `tcp/127.0.0.1:40711`.
-pub fn free_loopback_endpoint() -> std::io::Result<String> {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")?
-        .local_addr()?
-        .port();
-    Ok(format!("tcp/127.0.0.1:{port}"))
-}
-
 /// The session id a module's up key or liveliness key names (its last chunk).
 pub fn zid_of(key: &str) -> Option<&str> {
     key.rsplit('/').next().filter(|z| !z.is_empty())

@@ -27,6 +27,5 @@ pub use config::{
 };
 pub use keys::{
     ALIVE_KEY_PATTERN, CENTRAL_ALIVE_KEY, DEFAULT_ENDPOINT, RETRY_PERIOD_INIT_MS,
-    RETRY_PERIOD_MAX_MS, UP_KEY_PATTERN, alive_key, down_key, free_loopback_endpoint, up_key,
-    zid_of,
+    RETRY_PERIOD_MAX_MS, UP_KEY_PATTERN, alive_key, down_key, up_key, zid_of,
 };

@@ -10,7 +10,11 @@
 //! its link close, it is started again. Every walk must reach its goal without a collision;
 //! at the end the log is audited ([`tca_logs::audit`]): no message lost, none handled twice.
 //!
-//! - [`processes`]: the module processes.
+//! # Layout
+//!
+//! - this file: [`ChaosOptions`], [`run`] (the walks, the kills, the audit), the
+//!   [`ChaosReport`] and its text ([`summary`]).
+//! - [`processes`]: the module processes, started, killed and started again.
 
 pub mod processes;
 
@@ -138,7 +142,7 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
     tca_logs::set_aside(&log).context("cannot keep the previous log")?;
     let endpoint = match &options.listen {
         Some(e) => e.clone(),
-        None => tca_link::zenoh::free_loopback_endpoint().context("no free loopback port")?,
+        None => tca_link::net::free_loopback_endpoint().context("no free loopback port")?,
     };
     let central = tca_central::start(StartOptions {
         log: Some(log.clone()),
@@ -381,31 +385,6 @@ async fn wait_until(
     }
 }
 
-/// A readable summary of an audit.
-pub fn audit_text(audit: &Audit) -> String {
-    let mut s = format!(
-        "{} queries, {} goals and commands, {} informs, {} exceptions; {} refused with an error; \
-         {} tasks delivered again after their module went down ({} links closed)\n",
-        audit.queries,
-        audit.tasks,
-        audit.informs,
-        audit.exceptions,
-        audit.refused,
-        audit.redelivered,
-        audit.links_closed
-    );
-    if audit.is_clean() {
-        s.push_str("no message lost, none handled twice\n");
-    }
-    for l in &audit.lost {
-        s.push_str(&format!("LOST: {l}\n"));
-    }
-    for d in &audit.handled_twice {
-        s.push_str(&format!("HANDLED TWICE: {d}\n"));
-    }
-    s
-}
-
 /// A readable summary of a chaos run.
 pub fn summary(report: &ChaosReport) -> String {
     let reached = report.walks.iter().filter(|w| w.reached).count();
@@ -425,7 +404,7 @@ pub fn summary(report: &ChaosReport) -> String {
             .join(", "),
         report.wall_time_s
     );
-    s.push_str(&audit_text(&report.audit));
+    s.push_str(&report.audit.text());
     s.push_str(&format!(
         "log: {}\n{}\n",
         report.log.display(),

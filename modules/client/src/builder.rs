@@ -22,8 +22,7 @@ use crate::module::{DEFAULT_QUERY_TIMEOUT, Module, Settings};
 use crate::rejoin::{Greeting, Rejoiner, bootstrap};
 
 /// A sensible [`ModuleBuilder::requery_after_crash`] for modules whose peers are restarted
-/// when they crash (the walking modules use it): a query survives this many crashes of the
-/// module answering it.
+/// when they crash: a query survives this many crashes of the module answering it.
 pub const REQUERIES_AFTER_CRASH: u32 = 3;
 
 /// How long connecting waits for central's welcome and registration answer.

@@ -1,8 +1,7 @@
-//! How a module charges its computing to simulated time: what it measured, or a model (for
-//! instance of the 1990 system, so that a simulated walk's timing resembles the report's
-//! Figure 18 and concurrent planning pays off as it did there). A model makes a module's
-//! simulated stamps independent of the machine it runs on, so that the same run gives the
-//! same log twice.
+//! How a module charges its computing to simulated time: what it measured, or a model (of
+//! another machine, say, so that a simulated run's timing compares with a real system's). A
+//! model makes a module's simulated stamps independent of the machine it runs on, so that the
+//! same run gives the same log twice.
 
 use std::time::Duration;
 

@@ -5,7 +5,7 @@ use std::pin::Pin;
 use std::sync::Arc;
 
 use tca_messages::control::Registration;
-use tca_messages::{Message, MessageName, decode_data, encode_data};
+use tca_messages::{Message, MessageName, class_of, decode_data, encode_data};
 
 use crate::context::Context;
 use crate::error::{HandlerError, ModuleError, Result};
@@ -59,7 +59,7 @@ where
     let name = MessageName::new(M::NAME).map_err(|e| ModuleError::Usage(e.to_string()))?;
     let registration = Registration {
         name,
-        class: M::CLASS,
+        class: class_of::<M>(),
         format: M::format()?,
         reply: M::reply_format()?,
         replace,

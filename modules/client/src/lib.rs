@@ -57,7 +57,7 @@
 //!
 //! and this does not:
 //!
-//! ```compile_fail
+//! ```compile_fail,E0271
 //! use serde::{Deserialize, Serialize};
 //! #[derive(Serialize, Deserialize)]
 //! pub struct BasePosition;

@@ -3,10 +3,9 @@
 
 use tca_testkit::within;
 
-use tca_central::StartOptions;
 use tca_messages::control::{Registration, TaskOutcome};
 use tca_messages::{Class, DataFormat, MessageName, decode_data, encode_data};
-use tca_module::{Connector, HandlerError, Module, ModuleError};
+use tca_module::{HandlerError, Module, ModuleError};
 
 fn registration(name: &str, class: Class, reply: Option<DataFormat>) -> Registration {
     Registration {
@@ -20,8 +19,7 @@ fn registration(name: &str, class: Class, reply: Option<DataFormat>) -> Registra
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn raw_handlers_answer_raw_sends_and_see_who_asked() {
-    let central = tca_central::start(StartOptions::default()).await.unwrap();
-    let connector = Connector::from(central.in_process());
+    let (central, connector) = tca_testkit::in_process_central().await;
     let (seen_tx, mut seen_rx) = tokio::sync::mpsc::unbounded_channel();
     let seen = seen_tx.clone();
     let _doubler = within(
@@ -94,8 +92,7 @@ async fn raw_handlers_answer_raw_sends_and_see_who_asked() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn raw_registrations_are_checked_before_connecting() {
-    let central = tca_central::start(StartOptions::default()).await.unwrap();
-    let connector = Connector::from(central.in_process());
+    let (central, connector) = tca_testkit::in_process_central().await;
     // A query without a reply format.
     let err = within(
         "raw",

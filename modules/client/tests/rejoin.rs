@@ -1,4 +1,4 @@
-//! Central goes away and comes back (issue 8 item 2), over zenoh: the modules notice at once
+//! Central goes away and comes back, over zenoh: the modules notice at once
 //! (queries in flight and task watchers fail with `CentralLost`, new sends are refused with the
 //! same error instead of hanging), keep retrying, and register again with the new central on
 //! the same endpoint, after which messages flow as before.
@@ -134,8 +134,7 @@ async fn modules_rejoin_a_central_that_came_back() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn in_process_modules_never_go_offline() {
-    let central = tca_central::start(StartOptions::default()).await.unwrap();
-    let connector = Connector::from(central.in_process());
+    let (central, connector) = tca_testkit::in_process_central().await;
     let server = within("server connects", server(&connector)).await;
     assert!(server.is_online());
     assert!(server.wait_online(Duration::from_millis(10)).await);

@@ -1,4 +1,4 @@
-//! Authentication, authorisation and resource limits, end to end (issue 8 items 5 and 6):
+//! Authentication, authorisation and resource limits, end to end:
 //! central with a policy file refuses strangers, wrong secrets and sends or registrations
 //! outside an identity's rules (nothing of them is routed), refuses zenoh clients without the
 //! right zenoh login, never logs a secret, and throttles a flooding module while others keep

@@ -1,4 +1,4 @@
-//! Simulated Controller (report 003, §4): the single leg, its carriage and the true terrain
+//! Simulated Controller (the report, §4): the single leg, its carriage and the true terrain
 //! behind the Controller's interface of §4.2, served on the TCA bus.
 //!
 //! ```no_run
@@ -29,6 +29,8 @@
 //!   raised as exceptions.
 //! - [`convert`]: message types to and from the simulator's types; which exception a
 //!   simulator error raises.
+//! - [`persist`]: the state file that survives a restart (leg, carriage, clock, collisions)
+//!   and the remembered outcomes of the latest commands.
 
 pub mod config;
 pub mod controller;

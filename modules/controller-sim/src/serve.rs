@@ -21,7 +21,7 @@ use crate::convert::{
     Raised, body_pose_to_message, carriage_point_to_message, force_to_message, joints_from_message,
     joints_to_message, world_point_to_message,
 };
-use crate::persist::Persistence;
+use crate::persist::{Persistence, StateError};
 
 /// Connects the simulated Controller to central under `config.module_name` and serves the
 /// Controller's messages (§4.2) until the returned [`Module`] (and every clone) is dropped
@@ -32,25 +32,23 @@ use crate::persist::Persistence;
 /// [`ControllerStatus`]. A failed `legMove`/`bodyMove` raises
 /// [`MoveFailed`](tca_single_leg_messages::MoveFailed) (or
 /// [`HardwareFault`](tca_single_leg_messages::HardwareFault)) in the command's context and ends
-/// the command with failure. A bad configuration is a [`ModuleError::Usage`] saying what to
-/// fix.
+/// the command with failure. A bad configuration is a [`ModuleError::Config`] saying what to
+/// fix; a state file that cannot be read or written, a [`ModuleError::Io`] or
+/// [`ModuleError::Config`].
 pub async fn connect(
     connector: &Connector,
     config: ControllerConfig,
 ) -> Result<Module, ModuleError> {
     let mut controller = Controller::new(&config, Instant::now())
-        .map_err(|e| ModuleError::Usage(format!("controller configuration: {e}")))?;
+        .map_err(|e| ModuleError::Config(format!("controller configuration: {e}")))?;
     let persistence = match &config.state_file {
         Some(path) => {
-            let (persistence, saved) =
-                Persistence::open(path).map_err(|e| ModuleError::Usage(e.to_string()))?;
+            let (persistence, saved) = Persistence::open(path).map_err(state_error)?;
             if let Some(saved) = saved {
                 controller.restore(&saved, Instant::now());
                 tracing::info!(file = %path.display(), carriage_y_m = saved.sim.carriage.y_m, "controller state restored: the leg is where the last controller left it");
             } else {
-                persistence
-                    .write(controller.saved())
-                    .map_err(|e| ModuleError::Usage(e.to_string()))?;
+                persistence.write(controller.saved()).map_err(state_error)?;
             }
             Some(Arc::new(Mutex::new(persistence)))
         }
@@ -150,13 +148,24 @@ pub async fn connect(
     builder.connect(connector).await
 }
 
+/// A state file that cannot be used, as the module library's error.
+fn state_error(e: StateError) -> ModuleError {
+    match e {
+        StateError::Io { path, source } => ModuleError::Io {
+            what: format!("controller state file {}", path.display()),
+            source,
+        },
+        other => ModuleError::Config(other.to_string()),
+    }
+}
+
 /// Connects the built-in Controller ([`ControllerConfig::builtin`]: obstacle course 1, the
 /// foot planted at the start of the rails, real time) for `tca module controller`. Choosing
 /// another course or speed is the caller's job: build a [`ControllerConfig`] and call
 /// [`connect`].
 pub async fn run_builtin(connector: &Connector) -> Result<Module, ModuleError> {
     let config = ControllerConfig::builtin()
-        .map_err(|e| ModuleError::Usage(format!("built-in controller configuration: {e}")))?;
+        .map_err(|e| ModuleError::Config(format!("built-in controller configuration: {e}")))?;
     connect(connector, config).await
 }
 

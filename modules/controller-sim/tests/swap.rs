@@ -1,4 +1,4 @@
-//! Swapping the Controller (issue 4, item 5): any module that registers the Controller's
+//! Swapping the Controller: any module that registers the Controller's
 //! messages replaces it, and the modules that use it do not change. Here a trivial "replay"
 //! Controller answering fixed poses takes over from the simulator, then a restarted
 //! simulator takes over back, while the same client code keeps running.

@@ -1,4 +1,4 @@
-//! Gait Planner (report 003, §6.2.1 and §8.2): chooses where to plant the foot and how far
+//! Gait Planner (the report, §6.2.1 and §8.2): chooses where to plant the foot and how far
 //! to move the body, by combining constraint cost maps on a 10 cm grid over the reachable
 //! space ahead of the carriage (behind it when walking backward).
 //!

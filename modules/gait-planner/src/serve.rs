@@ -83,10 +83,10 @@ struct Shared {
 
 /// Connects the Gait Planner to central under `config.module_name` and serves
 /// [`PlanStep`] until the returned [`Module`] is dropped or closed. Bad parameters are a
-/// [`ModuleError::Usage`] saying what to fix.
+/// [`ModuleError::Config`] saying what to fix.
 pub async fn connect(connector: &Connector, config: GaitConfig) -> Result<Module, ModuleError> {
     let planner = GaitPlanner::new(config.leg.clone(), config.params)
-        .map_err(|e| ModuleError::Usage(format!("gait planner configuration: {e}")))?;
+        .map_err(|e| ModuleError::Config(format!("gait planner configuration: {e}")))?;
     let walks = crate::walk::Walks::default();
     let shared = Shared {
         planner: Arc::new(planner),

@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex};
 use tca_testkit::within;
 
 use nalgebra::Point2;
-use tca_central::{RunningCentral, StartOptions};
+use tca_central::RunningCentral;
 use tca_controller_sim::sim::{LegSimulator, StartPose};
 use tca_gait_planner::{GaitConfig, synthetic};
 use tca_lrp::{LrpConfig, MapValue, TerrainGrid};
@@ -39,10 +39,7 @@ struct Scene {
 }
 
 async fn scene(terrain: HeightField, body_y: f64, foot: Point2<f64>) -> Scene {
-    let central = within("central", tca_central::start(StartOptions::default()))
-        .await
-        .unwrap();
-    let connector = Connector::from(central.in_process());
+    let (central, connector) = tca_testkit::in_process_central().await;
     let sim = LegSimulator::new(
         LegParams::default(),
         terrain.clone(),

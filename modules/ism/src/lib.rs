@@ -1,4 +1,4 @@
-//! Imaging Sensor Manager (report 003, §5.2.1): virtual Erim and Perceptron laser
+//! Imaging Sensor Manager (the report, §5.2.1): virtual Erim and Perceptron laser
 //! rangefinders that cast rays against the simulated terrain, a virtual sensor replaying stored
 //! image sequences, the transform chain every image is tagged with, and the scanner-to-body
 //! calibration.

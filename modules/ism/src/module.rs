@@ -83,13 +83,13 @@ type SharedSensor = Arc<Mutex<Box<dyn RangeSensor>>>;
 pub const FRAME_TIME: std::time::Duration = std::time::Duration::from_millis(500);
 
 /// Connects the ISM module (`"ism"`) and serves `acquireImage`. Two sensors of one kind are a
-/// usage error.
+/// configuration error.
 pub async fn connect(connector: &Connector, config: IsmConfig) -> Result<Module, ModuleError> {
     let mut sensors: HashMap<SensorKind, SharedSensor> = HashMap::new();
     for sensor in config.sensors {
         let kind = sensor.spec().kind;
         if sensors.insert(kind, Arc::new(Mutex::new(sensor))).is_some() {
-            return Err(ModuleError::Usage(format!(
+            return Err(ModuleError::Config(format!(
                 "two {kind:?} sensors were configured for the ISM; configure one of each kind"
             )));
         }

@@ -4,7 +4,6 @@ use std::sync::Arc;
 use tca_testkit::within;
 
 use nalgebra::Point2;
-use tca_central::StartOptions;
 use tca_ism::stored::write_sequence_image;
 use tca_ism::{ImageFrames, IsmConfig, SensorSpec, StoredSequence, VirtualScanner};
 use tca_module::{Connector, Module};
@@ -31,10 +30,7 @@ async fn controller(c: &Connector, y_m: f64) -> Module {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn acquire_image_is_tagged_with_the_controllers_pose() {
-    let central = within("central", tca_central::start(StartOptions::default()))
-        .await
-        .unwrap();
-    let c = Connector::from(central.in_process());
+    let (_central, c) = tca_testkit::in_process_central().await;
     let _controller = within("controller", controller(&c, 2.5)).await;
     let params = LegParams::default();
     let config =
@@ -95,10 +91,7 @@ async fn a_stored_sequence_serves_its_images_in_order() {
     for image in &recorded {
         write_sequence_image(dir.path(), image).unwrap();
     }
-    let central = within("central", tca_central::start(StartOptions::default()))
-        .await
-        .unwrap();
-    let c = Connector::from(central.in_process());
+    let (_central, c) = tca_testkit::in_process_central().await;
     let _controller = within("controller", controller(&c, 7.0)).await;
     let stored = StoredSequence::open(dir.path(), SensorKind::Perceptron, false).unwrap();
     let _ism = within(
@@ -126,10 +119,7 @@ async fn a_stored_sequence_serves_its_images_in_order() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn two_sensors_of_one_kind_are_refused() {
-    let central = within("central", tca_central::start(StartOptions::default()))
-        .await
-        .unwrap();
-    let c = Connector::from(central.in_process());
+    let (_central, c) = tca_testkit::in_process_central().await;
     let params = LegParams::default();
     let config = IsmConfig::simulated(flat(), &params, 0).with_sensor(VirtualScanner::new(
         SensorSpec::erim(),

@@ -1,4 +1,4 @@
-//! The envelope of the ReachEnvelope Trajectory Finding Algorithm (§6.2.2, Figure 10b): the
+//! The envelope of the Envelope Trajectory Finding Algorithm (§6.2.2, Figure 10b): the
 //! lowest and highest foot heights the leg can be at, at the same moment, when the vertical
 //! axis moves at full speed while the horizontal joints move. The leg stops to lift only
 //! when the terrain ahead rises above the top of the envelope.

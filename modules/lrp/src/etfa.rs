@@ -1,4 +1,4 @@
-//! The ReachEnvelope Trajectory Finding Algorithm (§6.2.2): A* over the shoulder x elbow grid in
+//! The Envelope Trajectory Finding Algorithm (§6.2.2): A* over the shoulder x elbow grid in
 //! which every search state carries the envelope of foot heights reachable on arrival, so a
 //! 2D search finds time- and power-efficient 3D motions.
 //!

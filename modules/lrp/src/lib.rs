@@ -1,6 +1,6 @@
-//! Leg Recovery Planner (report 003, §6.2.2 and §6.3): moves the foot from where it is to a
+//! Leg Recovery Planner (the report, §6.2.2 and §6.3): moves the foot from where it is to a
 //! footfall without striking terrain, with time- and power-efficient trajectories found by
-//! the ReachEnvelope Trajectory Finding Algorithm, and tells the Gait Planner which footfalls the
+//! the Envelope Trajectory Finding Algorithm, and tells the Gait Planner which footfalls the
 //! foot can reach.
 //!
 //! ```
@@ -31,7 +31,7 @@
 //!   cells, converted from and to the wire) and [`ObstacleHeights`] (conservative heights).
 //! - [`cspace`]: [`CSpace`], the shoulder x elbow grid of lowest foot heights.
 //! - [`envelope`]: [`ReachEnvelope`], the heights reachable at one moment.
-//! - [`etfa`]: the ReachEnvelope Trajectory Finding Algorithm (A*).
+//! - [`etfa`]: the Envelope Trajectory Finding Algorithm (A*).
 //! - [`trajectory`]: way-point extraction (lifts first, lowers last) and an independent
 //!   clearance check.
 //! - [`planner`]: [`LegRecoveryPlanner`], input checks and the whole pipeline;

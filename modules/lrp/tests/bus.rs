@@ -11,7 +11,7 @@ use tca_testkit::within;
 use common::footfall;
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
-use tca_central::{RunningCentral, StartOptions};
+use tca_central::RunningCentral;
 use tca_controller_sim::sim::{LegSimulator, StartPose};
 use tca_lrp::{LrpConfig, MapValue, TerrainGrid};
 use tca_messages::control::TaskOutcome;
@@ -40,10 +40,7 @@ struct Scene {
 /// Central, a fake LTM Manager serving the true terrain, a fake Controller over the
 /// simulator (foot planted at `foot`, carriage at `body_y`), and the LRP.
 async fn scene(terrain: HeightField, body_y: f64, foot: Point2<f64>) -> Scene {
-    let central = within("central", tca_central::start(StartOptions::default()))
-        .await
-        .unwrap();
-    let connector = Connector::from(central.in_process());
+    let (central, connector) = tca_testkit::in_process_central().await;
     let branch = ElbowBranch::of(&common::planted(
         &terrain,
         body_y,

@@ -1,4 +1,4 @@
-//! LTM Manager benchmarks (issue 5 item 6): Erim and Perceptron image -> elevation map, merging
+//! LTM Manager benchmarks: Erim and Perceptron image -> elevation map, merging
 //! into a 20 x 20 m map at 10 cm, footfall evaluation and region queries, on course 3 seen from
 //! a carriage at y = 1 m.
 //!

@@ -1,4 +1,4 @@
-//! Local Terrain Map Manager (report 003, §5.2.2): builds elevation maps with per-cell
+//! Local Terrain Map Manager (the report, §5.2.2): builds elevation maps with per-cell
 //! uncertainty from range images, merges them by maximum likelihood, keeps a 20 x 20 m window
 //! around the vehicle in memory (paging the rest to disk), and answers region queries for
 //! elevation, elevation with uncertainty, footfall evaluation and slope maps, with a cache.

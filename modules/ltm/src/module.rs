@@ -12,11 +12,18 @@ use std::sync::{Arc, Mutex};
 use tca_module::{ComputeTime, Connector, Context, HandlerError, Module, ModuleError};
 use tca_single_leg_messages::{AcquireImage, MapGrid, MapRegion};
 
+use crate::error::LtmError;
 use crate::manager::{LocalTerrainMap, LtmConfig};
 
 /// Connects the LTM Manager module (`"ltm"`) with an empty map and serves `mapRegion`.
 pub async fn connect(connector: &Connector, config: LtmConfig) -> Result<Module, ModuleError> {
-    let map = LocalTerrainMap::new(config).map_err(|e| ModuleError::Config(e.to_string()))?;
+    let map = LocalTerrainMap::new(config).map_err(|e| match e {
+        LtmError::Io { path, source } => ModuleError::Io {
+            what: format!("map tile store {}", path.display()),
+            source,
+        },
+        other => ModuleError::Config(other.to_string()),
+    })?;
     connect_with_map(connector, map).await
 }
 

@@ -1,4 +1,4 @@
-//! Issue 5 item 5: the LTM Manager's behaviour on scenes of known geometry.
+//! The LTM Manager's behaviour on scenes of known geometry.
 
 mod common;
 

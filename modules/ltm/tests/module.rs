@@ -8,18 +8,14 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use tca_testkit::within;
 
 use common::{BOX, params, rect, terrain};
-use tca_central::StartOptions;
 use tca_ism::{IsmConfig, SensorSpec, VirtualScanner};
 use tca_ltm::LtmConfig;
-use tca_module::{Connector, Module};
+use tca_module::Module;
 use tca_single_leg_messages::{BodyPose, BodyPosition, MapCell, MapKind, MapRegion};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn map_region_takes_an_image_when_it_has_none_or_is_asked_to() {
-    let central = within("central", tca_central::start(StartOptions::default()))
-        .await
-        .unwrap();
-    let c = Connector::from(central.in_process());
+    let (_central, c) = tca_testkit::in_process_central().await;
     let poses = Arc::new(AtomicUsize::new(0));
     let counter = poses.clone();
     let _controller = within(

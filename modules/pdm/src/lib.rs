@@ -1,4 +1,4 @@
-//! Perception Display Manager (report 003, §5.2.3): draws the LTM Manager's maps of any kind
+//! Perception Display Manager (the report, §5.2.3): draws the LTM Manager's maps of any kind
 //! and region as PNG pictures, with requested 3D positions (planned footfalls) and paths (leg
 //! paths) drawn over them.
 //!

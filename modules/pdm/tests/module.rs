@@ -5,11 +5,10 @@ use std::sync::Arc;
 use tca_testkit::within;
 
 use nalgebra::Point2;
-use tca_central::StartOptions;
 use tca_ism::{IsmConfig, SensorSpec, VirtualScanner};
 use tca_ltm::LtmConfig;
 use tca_messages::control::TaskOutcome;
-use tca_module::{Connector, Module};
+use tca_module::Module;
 use tca_pdm::{PdmConfig, RenderOptions, render_map};
 use tca_robot::{HeightField, LegParams};
 use tca_single_leg_messages::{
@@ -30,10 +29,7 @@ fn region(kind: MapKind) -> MapRegion {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn render_map_writes_a_picture_of_the_ltm_map() {
-    let central = within("central", tca_central::start(StartOptions::default()))
-        .await
-        .unwrap();
-    let c = Connector::from(central.in_process());
+    let (_central, c) = tca_testkit::in_process_central().await;
     let _controller = within(
         "controller",
         Module::builder("controller")

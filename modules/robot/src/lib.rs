@@ -1,4 +1,4 @@
-//! Shared models of the single-leg walking testbed (report 003, §2): leg kinematics and its
+//! Shared models of the single-leg walking testbed (the report, §2): leg kinematics and its
 //! parameters, terrain height fields with ray casting, generic grids, the obstacle courses of
 //! §7, random courses and ESRI ASCII terrain files.
 //!

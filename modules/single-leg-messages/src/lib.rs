@@ -4,6 +4,13 @@
 //!
 //! Frames (see `tca-robot`): world X across the 6 m pit, Y along the rails (the walking
 //! direction), Z up, origin at a pit corner at the nominal sand level.
+//!
+//! # Layout
+//!
+//! One file, in sections by the module that handles the messages: geometry shared by all,
+//! the Controller (§4.2), the Imaging Sensor Manager (§5.2.1), the Local Terrain Map Manager
+//! (§5.2.2), the Perception Display Manager (§5.2.3), and planning (§6: the Gait Planner and
+//! the Leg Recovery Planner).
 
 use serde::{Deserialize, Serialize};
 
@@ -458,7 +465,7 @@ message!(StepPlanned: inform "stepPlanned");
 
 #[cfg(test)]
 mod tests {
-    use tca_messages::{Class, Message};
+    use tca_messages::{Class, Message, class_of};
 
     use super::*;
 
@@ -467,7 +474,7 @@ mod tests {
         fn check<M: Message>() {
             let f = M::format().unwrap_or_else(|e| panic!("{}: {e}", M::NAME));
             f.validate().unwrap();
-            if M::CLASS == Class::Query {
+            if class_of::<M>() == Class::Query {
                 assert!(M::reply_format().unwrap().is_some(), "{}", M::NAME);
             }
         }

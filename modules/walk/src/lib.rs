@@ -1,4 +1,4 @@
-//! The single-leg walking system assembled (report 003): the Controller (simulated), Imaging
+//! The single-leg walking system assembled (the report): the Controller (simulated), Imaging
 //! Sensor Manager, Local Terrain Map Manager, Perception Display Manager, Gait Planner and Leg
 //! Recovery Planner on one central, one `walk` goal driving the leg down an obstacle course,
 //! and what happened, reported.

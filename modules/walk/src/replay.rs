@@ -91,6 +91,7 @@ pub async fn replay_walk(options: &WalkReplayOptions) -> anyhow::Result<ReplayRe
         stand_ins: options.stand_ins.clone(),
         root_goal: WALK_GOAL.into(),
         rules: comparison_rules(),
+        how_to_record: "record a walk with `tca walk --out DIR` and replay DIR/traffic.mcap".into(),
         out: options.out.clone(),
         goal_timeout: options.goal_timeout,
     };

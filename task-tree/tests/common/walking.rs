@@ -1,4 +1,4 @@
-//! A discrete-event driver for the single-leg walking task tree of Figure 5 (paper 003
+//! A discrete-event driver for the single-leg walking task tree of Figure 5 (the report,
 //! §3.2), shared by the tests and the benchmark.
 //!
 //! Per step `k`: the Gait Planner handles the goal `planGait k`, which issues the goal

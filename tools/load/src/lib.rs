@@ -10,6 +10,13 @@
 //! ended achieved, and every inform must have reached its handler ([`LoadReport::losses`]).
 //!
 //! Used by `benches/load.rs` (the figures in BENCHMARKS.md) and by `tests/load.rs`.
+//!
+//! # Layout
+//!
+//! - this file: [`LoadOptions`], [`TransportKind`], [`run`]: the modules, their senders and
+//!   the tally of what was sent, handled and answered.
+//! - `report`: [`LoadReport`], what a run found, as text.
+//! - `memory`: the process's resident memory, sampled while the load runs.
 
 mod memory;
 mod report;
@@ -221,7 +228,7 @@ pub async fn run(options: &LoadOptions, log_dir: &Path) -> anyhow::Result<LoadRe
 
 /// A zenoh endpoint on a free loopback port.
 fn free_endpoint() -> anyhow::Result<String> {
-    tca_link::zenoh::free_loopback_endpoint().context("no free loopback port")
+    tca_link::net::free_loopback_endpoint().context("no free loopback port")
 }
 
 /// Connects the modules, a few at a time, each handling its query, goal and inform.

@@ -22,6 +22,12 @@
 //! Modules are connected in the recorded order, so link numbers and message ids come out the
 //! same. A replay that has drifted from the record can wait for answers that never come, so
 //! each replayed goal is bounded in wall time ([`ReplayPlan::goal_timeout`]).
+//!
+//! # Layout
+//!
+//! - this file: [`ReplayPlan`], the [`LiveSide`] a vocabulary provides, [`replay`] and the
+//!   [`ReplayReport`].
+//! - [`stand_in`]: a module played back from its script in the log.
 
 pub mod stand_in;
 
@@ -61,6 +67,8 @@ pub struct ReplayPlan {
     pub root_goal: String,
     /// Data fields the comparison treats specially (the vocabulary's rules).
     pub rules: Rules,
+    /// What to tell a user whose log holds no complete run to replay (how to record one).
+    pub how_to_record: String,
     /// Keep the replay's traffic log in this directory.
     pub out: Option<PathBuf>,
     /// Wall-clock limit of each replayed goal; `None`: [`GOAL_TIMEOUT_FACTOR`] times its
@@ -95,7 +103,7 @@ pub struct GoalReplay {
     pub recorded: String,
     /// How it ended in the replay.
     pub live: String,
-    /// When it ended in the record, simulated seconds (if the walk ran on simulated time).
+    /// When it ended in the record, simulated seconds (if the run was on simulated time).
     pub recorded_sim_s: Option<f64>,
     /// When it ended in the replay, simulated seconds.
     pub live_sim_s: Option<f64>,
@@ -220,7 +228,7 @@ struct Recorded {
     modules: Vec<String>,
 }
 
-fn read_record(path: &Path, root_goal: &str) -> anyhow::Result<Recorded> {
+fn read_record(path: &Path, root_goal: &str, how_to_record: &str) -> anyhow::Result<Recorded> {
     let log = LogFile::open(path).with_context(|| format!("cannot read log {}", path.display()))?;
     let originator = log.records.iter().find_map(|r| {
         let tca_logs::RecordKind::Frame(f) = &r.kind else {
@@ -241,8 +249,7 @@ fn read_record(path: &Path, root_goal: &str) -> anyhow::Result<Recorded> {
     let Some(originator) = originator else {
         bail!(
             "{} holds no `{root_goal}` goal sent by a user{cut}, so there is nothing to \
-             replay; record a run that sends one (for a walk: `tca walk --out DIR`, then replay \
-             DIR/traffic.mcap)",
+             replay; {how_to_record}",
             path.display()
         );
     };
@@ -250,7 +257,7 @@ fn read_record(path: &Path, root_goal: &str) -> anyhow::Result<Recorded> {
     if let Some(open) = roots.iter().find(|r| r.outcome.is_none()) {
         bail!(
             "the recorded {} goal never ends in {}{cut}: the record is incomplete, so there is \
-             nothing complete to compare with; record the walk again",
+             nothing complete to compare with; {how_to_record}",
             open.envelope.name,
             path.display()
         );
@@ -317,7 +324,7 @@ fn log_dir(out: Option<&Path>) -> anyhow::Result<(PathBuf, bool)> {
 /// replayed; divergences are in the report.
 pub async fn replay(plan: &ReplayPlan, live: &mut dyn LiveSide) -> anyhow::Result<ReplayReport> {
     let started = Instant::now();
-    let recorded = read_record(&plan.log, &plan.root_goal)?;
+    let recorded = read_record(&plan.log, &plan.root_goal, &plan.how_to_record)?;
     let mut played: Vec<String> = Vec::new();
     for name in &plan.stand_ins {
         if name == &recorded.originator {

@@ -214,9 +214,7 @@ async fn perform(
                     .send_watched_raw(env.class, name, env.data.clone(), constraints)
                     .map(|t| t.id())
             } else {
-                handle
-                    .send_raw(env.class, name, env.data.clone(), constraints)
-                    .map(|t| t.id())
+                handle.send_raw(env.class, name, env.data.clone(), constraints)
             };
             sent.map(|id| {
                 lock(state).ids.insert(env.id, id);
@@ -238,8 +236,8 @@ async fn perform(
             },
             Ok(ControlRequest::Constrain(c)) => match remap_constraint(&c.constraint, state) {
                 Some(c) => handle.constrain(c).await,
-                None => Err(ModuleError::Usage(
-                    "the constraint names a task not known in the replay".into(),
+                None => Err(ModuleError::Protocol(
+                    "the recorded constraint names a task not known in the replay".into(),
                 )),
             },
             Ok(_) => Ok(()),
@@ -253,7 +251,7 @@ async fn perform(
 }
 
 fn unknown_node(n: NodeId) -> ModuleError {
-    ModuleError::Usage(format!(
+    ModuleError::Protocol(format!(
         "recorded node {n} was never delivered to this stand-in in the replay"
     ))
 }

@@ -1,6 +1,10 @@
 //! The per-module timeline of a traffic log, as in the report's Figure 18: as text
 //! ([`text`]) and as a PNG picture ([`picture`], [`write_png`]; dark: computing, light:
 //! waiting on another module, blank: idle). The breakdown itself is `tca_logs::stats`.
+//!
+//! # Layout
+//!
+//! One file: [`text`], then [`picture`] and [`write_png`] on a `tca_canvas::Canvas`.
 
 use std::fmt::Write as _;
 use std::path::Path;

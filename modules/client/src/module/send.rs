@@ -4,10 +4,10 @@
 use std::time::Duration;
 
 use bytes::Bytes;
-use tca_messages::control::MonitorAction;
+use tca_messages::control::{MonitorAction, TaskOutcome};
 use tca_messages::{
     Class, ConstraintSpec, Envelope, Failure, Message, MessageId, MessageName, RouteError,
-    SendOptions, decode_data, encode, encode_data, kind,
+    SendOptions, class_of, decode_data, encode, encode_data, kind,
 };
 use tokio::sync::oneshot;
 
@@ -102,10 +102,15 @@ impl Module {
         constraints: impl IntoIterator<Item = ConstraintSpec>,
     ) -> Result<Task>
     where
-        M::Kind: kind::Task,
+        M::Kind: kind::TaskClass,
     {
-        self.send_task_raw(M::CLASS, M::NAME, encode_data(message)?, constraints, false)
-            .map(|(task, _)| task)
+        self.send_task_raw(
+            class_of::<M>(),
+            M::NAME,
+            encode_data(message)?,
+            constraints,
+            None,
+        )
     }
 
     /// Sends a goal or command with temporal constraints and asks central to say how it ends:
@@ -116,9 +121,9 @@ impl Module {
         constraints: impl IntoIterator<Item = ConstraintSpec>,
     ) -> Result<WatchedTask>
     where
-        M::Kind: kind::Task,
+        M::Kind: kind::TaskClass,
     {
-        self.send_watched_raw(M::CLASS, M::NAME, encode_data(message)?, constraints)
+        self.send_watched_raw(class_of::<M>(), M::NAME, encode_data(message)?, constraints)
     }
 
     /// Sends an inform (one-way).
@@ -136,25 +141,25 @@ impl Module {
 
     /// Sends a goal, command, inform or exception given by class, name and postcard data, in
     /// this handle's context (an exception is raised there). `constraints` apply to goals and
-    /// commands only; for informs and exceptions they must be empty. The returned [`Task`]
-    /// names the message sent. For tools that do not know the message's Rust type
-    /// (`tca log replay`); modules use [`Module::goal`], [`Module::raise`] and the like.
+    /// commands only; for informs and exceptions they must be empty. Returns the id of the
+    /// message sent. For tools that do not know the message's Rust type (`tca log replay`);
+    /// modules use [`Module::goal`], [`Module::raise`] and the like.
     pub fn send_raw(
         &self,
         class: Class,
         name: &str,
         data: Vec<u8>,
         constraints: impl IntoIterator<Item = ConstraintSpec>,
-    ) -> Result<Task> {
+    ) -> Result<MessageId> {
         let constraints: Vec<ConstraintSpec> = constraints.into_iter().collect();
         match class {
             Class::Goal | Class::Command => self
-                .send_task_raw(class, name, data, constraints, false)
-                .map(|(task, _)| task),
+                .send_task_raw(class, name, data, constraints, None)
+                .map(|t| t.id),
             Class::Inform | Class::Exception if constraints.is_empty() => {
                 let envelope = self.envelope(class, name, data, None)?;
                 self.transmit(&envelope)?;
-                Ok(Task { id: envelope.id })
+                Ok(envelope.id)
             }
             Class::Inform | Class::Exception => Err(ModuleError::Usage(format!(
                 "{name} is a {class}: constraints apply to goals and commands only"
@@ -180,42 +185,35 @@ impl Module {
                  apply to goals and commands only"
             )));
         }
-        let (task, outcome) = self.send_task_raw(class, name, data, constraints, true)?;
-        let outcome = outcome.ok_or_else(|| {
-            ModuleError::Usage("a watched task was sent without its watch".into())
-        })?;
+        let (watch, outcome) = oneshot::channel();
+        let task = self.send_task_raw(class, name, data, constraints, Some(watch))?;
         Ok(WatchedTask { task, outcome })
     }
 
-    /// Sends a task's envelope; with `notify`, watches for its outcome (the watch is dropped
-    /// again if the send fails).
+    /// Sends a task's envelope; with a `watch`, central is asked to say how the task ends and
+    /// the watch hears it (the watch is dropped again if the send fails).
     fn send_task_raw(
         &self,
         class: Class,
         name: &str,
         data: Vec<u8>,
         constraints: impl IntoIterator<Item = ConstraintSpec>,
-        notify: bool,
-    ) -> Result<(
-        Task,
-        Option<oneshot::Receiver<Result<tca_messages::control::TaskOutcome>>>,
-    )> {
+        watch: Option<oneshot::Sender<Result<TaskOutcome>>>,
+    ) -> Result<Task> {
         let options = SendOptions {
             constraints: constraints.into_iter().collect(),
-            notify,
+            notify: watch.is_some(),
         };
         let envelope = self.envelope(class, name, data, Some(options))?;
         let id = envelope.id;
-        let outcome = notify.then(|| {
-            let (tx, rx) = oneshot::channel();
-            lock(&self.shared.watchers).insert(id, tx);
-            rx
-        });
+        if let Some(watch) = watch {
+            lock(&self.shared.watchers).insert(id, watch);
+        }
         if let Err(e) = self.transmit(&envelope) {
             lock(&self.shared.watchers).remove(&id);
             return Err(e);
         }
-        Ok((Task { id }, outcome))
+        Ok(Task { id })
     }
 
     /// Sends and waits for the envelope that answers it.
@@ -322,7 +320,7 @@ where
     M::Kind: kind::MonitorSend,
 {
     Ok(MonitorAction::Send {
-        class: M::CLASS,
+        class: class_of::<M>(),
         name: MessageName::new(M::NAME).map_err(|e| ModuleError::Usage(e.to_string()))?,
         data: encode_data(message)?,
     })

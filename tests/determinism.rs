@@ -1,0 +1,88 @@
+//! The same sequential walk, twice, gives the same traffic log: every frame in the same order,
+//! with the same data and the same simulated stamps (each module's computing is modelled under
+//! `--compute paper`, so nothing in the log depends on how fast this machine is).
+
+mod common;
+
+use std::path::Path;
+
+use common::within;
+use tca_logs::{LogFile, RecordKind};
+use tca_messages::is_simulated_stamp;
+use tca_single_leg_messages::WalkMode;
+use tca_walk::{ComputeModel, TerrainChoice, WalkOptions};
+use tokio::sync::mpsc;
+
+/// One frame as the comparison sees it: direction, link, peer and the whole envelope, with
+/// wall-clock stamps (hellos and registrations, stamped before a module knows any simulated
+/// time) set to zero.
+fn frames(path: &Path) -> Vec<String> {
+    let log = LogFile::open(path).expect("the walk's log reads back");
+    assert!(log.truncated.is_none(), "{:?}", log.truncated);
+    log.records
+        .iter()
+        .filter_map(|r| match &r.kind {
+            RecordKind::Frame(f) => {
+                let mut env = LogFile::envelope(f).expect("every frame decodes");
+                if !is_simulated_stamp(env.timestamp_ns) {
+                    env.timestamp_ns = 0;
+                }
+                Some(format!(
+                    "{:?} link {} {:?} {:?} t={} ctx={:?} node={:?} re={:?} opts={:?} data={:?}",
+                    f.direction,
+                    f.link,
+                    f.peer,
+                    env,
+                    env.timestamp_ns,
+                    env.context,
+                    env.node,
+                    env.correlation,
+                    env.options,
+                    env.data
+                ))
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+async fn walk_to(dir: &Path) {
+    let options = WalkOptions {
+        terrain: TerrainChoice::Course(3),
+        goal_y_m: None,
+        backward: false,
+        mode: WalkMode::Sequential,
+        seed: 1,
+        out: Some(dir.to_owned()),
+        step_pictures: false,
+        connect: None,
+        compute: ComputeModel::Paper,
+    };
+    let (tx, _rx) = mpsc::unbounded_channel();
+    let report = within("walk", tca_walk::walk(&options, tx))
+        .await
+        .expect("the walk runs");
+    assert!(report.reached, "{report:#?}");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_same_sequential_walk_twice_gives_the_same_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    walk_to(&a).await;
+    walk_to(&b).await;
+    let (fa, fb) = (
+        frames(&a.join("traffic.mcap")),
+        frames(&b.join("traffic.mcap")),
+    );
+    assert!(fa.len() > 100, "{} frames", fa.len());
+    if let Some(i) = fa.iter().zip(&fb).position(|(x, y)| x != y) {
+        panic!(
+            "the logs part at frame {i} of {}:\nfirst:  {}\nsecond: {}",
+            fa.len(),
+            fa[i],
+            fb[i]
+        );
+    }
+    assert_eq!(fa.len(), fb.len(), "one log is longer");
+}
