@@ -70,7 +70,10 @@ impl Central {
 
     /// Suspends the raising node and routes the exception (also used by monitors).
     pub(super) fn raise_internal(&mut self, envelope: Envelope, node: u64, out: &mut Vec<Action>) {
-        if let Err(reason) = self.tree.suspend(node, self.now, Some(envelope.id.0), out) {
+        if let Err(reason) = self
+            .tree
+            .suspend(node, self.tree_now(), Some(envelope.id.0), out)
+        {
             self.problem(None, Some(envelope.sender.clone()), reason, &[], out);
         }
         tracing::info!(exception = %envelope.name, node, "exception raised");
@@ -169,7 +172,7 @@ impl Central {
         if !self.tree.contains(node) {
             return; // killed or retired by the handler
         }
-        match self.tree.resume(node, self.now, Some(cause.0), out) {
+        match self.tree.resume(node, self.tree_now(), Some(cause.0), out) {
             Ok(events) => self.tree_events(events, out),
             Err(reason) => tracing::debug!(%reason, "resume after exception"),
         }
@@ -209,7 +212,7 @@ impl Central {
             task.failure = Some(reason.clone());
         }
         self.problem(None, Some(cause.sender.clone()), reason, &[], out);
-        match self.tree.kill(root, self.now, Some(cause.id.0), out) {
+        match self.tree.kill(root, self.tree_now(), Some(cause.id.0), out) {
             Ok(events) => self.tree_events(events, out),
             Err(reason) => tracing::debug!(%reason, "kill after unhandled exception"),
         }
@@ -250,7 +253,7 @@ impl Central {
     ) -> Result<(), String> {
         let events = self
             .tree
-            .retry(retry.node.0, self.now, Some(request.id.0), out)?;
+            .retry(retry.node.0, self.tree_now(), Some(request.id.0), out)?;
         if let Some(id) = self.node_task.get(&retry.node.0).copied()
             && let Some(t) = self.tasks.get_mut(&id)
         {

@@ -78,6 +78,7 @@ impl Harness {
             context: None,
             node: None,
             correlation: None,
+            cause: None,
             timestamp_ns: self.now,
             options: SendOptions::default(),
             redelivery: 0,
@@ -96,6 +97,7 @@ impl Harness {
             capacity,
             pid: 1,
             host: "test".into(),
+            simulated_time: false,
         };
         let mut env = self.envelope(
             link,
@@ -728,6 +730,7 @@ fn the_policy_refuses_strangers_and_sends_outside_the_rules_without_routing_them
                 capacity: 1,
                 pid: 1,
                 host: "test".into(),
+                simulated_time: false,
             },
             credentials: control::Credentials {
                 identity: id.into(),

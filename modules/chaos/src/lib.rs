@@ -147,7 +147,10 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
     let central = tca_central::start(StartOptions {
         log: Some(log.clone()),
         listen: vec![endpoint.clone()],
-        ..StartOptions::default()
+        config: tca_central::CentralConfig {
+            simulated_time: true,
+            ..tca_central::CentralConfig::default()
+        },
     })
     .await
     .context("cannot start central")?;

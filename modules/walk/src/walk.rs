@@ -144,6 +144,10 @@ pub async fn walk(
             let log = out.as_ref().map(|d| d.join("traffic.mcap"));
             let central = tca_central::start(StartOptions {
                 log: log.clone(),
+                config: tca_central::CentralConfig {
+                    simulated_time: true,
+                    ..tca_central::CentralConfig::default()
+                },
                 ..StartOptions::default()
             })
             .await
