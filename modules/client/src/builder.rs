@@ -209,14 +209,14 @@ impl ModuleBuilder {
                 });
             }
         };
-        // Register every handler.
-        let register = ControlRequest::Register(Register {
-            entries: self
-                .handlers
-                .values()
-                .map(|h| h.registration.clone())
-                .collect(),
-        });
+        // Register every handler, in name order (the same registration on every run).
+        let mut entries: Vec<_> = self
+            .handlers
+            .values()
+            .map(|h| h.registration.clone())
+            .collect();
+        entries.sort_by(|a, b| a.name.cmp(&b.name));
+        let register = ControlRequest::Register(Register { entries });
         let reg_id = MessageId::new(welcome.link, 1);
         let reg_env = bootstrap(&name, &register, reg_id)?;
         link.sender.send(encode(&reg_env)?.into())?;
