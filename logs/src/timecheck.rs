@@ -118,9 +118,9 @@ fn check_constraints(log: &LogFile, check: &mut TimeCheck) {
                     }
                 }
             }
-            Err(e) => check
-                .violations
-                .push(format!("the recorded tree operation {op:?} does not replay: {e}")),
+            Err(e) => check.violations.push(format!(
+                "the recorded tree operation {op:?} does not replay: {e}"
+            )),
         }
     }
     for (before, after) in constraints {

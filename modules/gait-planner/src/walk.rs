@@ -150,10 +150,19 @@ pub fn next_step(
 }
 
 /// The constraints the next step is sent with: sequentially, it is not planned before this
-/// step's body move is achieved.
+/// step's body move is achieved; concurrently (§3.3), it is planned while this step executes,
+/// but not before the previous step's body move is achieved (one step of look-ahead: what
+/// the scanner sees from where the carriage stands).
 pub fn next_step_constraints(step: &PlanStep, body_move: &Task) -> Option<ConstraintSpec> {
-    (step.mode == WalkMode::Sequential)
-        .then(|| ConstraintSpec::delay_planning(body_move.task_ref(), TaskRef::This))
+    match step.mode {
+        WalkMode::Sequential => Some(ConstraintSpec::delay_planning(
+            body_move.task_ref(),
+            TaskRef::This,
+        )),
+        WalkMode::Concurrent => step.after_body_move.map(|previous| {
+            ConstraintSpec::delay_planning(TaskRef::Message(previous), TaskRef::This)
+        }),
+    }
 }
 
 /// `moveFailed` at the walk node: plan again from where the leg is.
