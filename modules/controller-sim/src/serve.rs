@@ -40,15 +40,12 @@ pub async fn connect(
     connector: &Connector,
     config: ControllerConfig,
 ) -> Result<Module, ModuleError> {
-    // On the bus's simulated time the Controller's own clock is the bus's: a message's
+    // On central's simulated clock the Controller's own clock is the bus's: a message's
     // simulated stamp maps onto an instant after `epoch`, and moves play out in it at the
     // rate of one simulated second a second, whatever the wall-clock pace (`config.speed`).
+    // Otherwise moves play out in wall-clock time at that pace (see `Shared::now`).
     let epoch = Instant::now();
-    let mut timeline = config.clone();
-    if config.bus_simulated_time {
-        timeline.speed = SpeedFactor::Times(1.0);
-    }
-    let mut controller = Controller::new(&timeline, epoch)
+    let mut controller = Controller::new(&config, epoch)
         .map_err(|e| ModuleError::Config(format!("controller configuration: {e}")))?;
     let persistence = match &config.state_file {
         Some(path) => {
@@ -72,7 +69,7 @@ pub async fn connect(
         state: Arc::new(Mutex::new(controller)),
         turn: Arc::new(tokio::sync::Mutex::new(())),
         persistence,
-        clock: config.bus_simulated_time.then_some(epoch),
+        epoch,
         pace: config.speed,
     };
     let builder = Module::builder(config.module_name.clone())
@@ -188,8 +185,8 @@ struct Shared {
     turn: Arc<tokio::sync::Mutex<()>>,
     /// The state file, when the Controller keeps one.
     persistence: Option<Arc<Mutex<Persistence>>>,
-    /// On the bus's simulated time: the instant simulated time 0 maps onto.
-    clock: Option<Instant>,
+    /// On central's simulated clock: the instant simulated time 0 maps onto.
+    epoch: Instant,
     /// How fast moves play out against the wall clock.
     pace: SpeedFactor,
 }
@@ -201,18 +198,32 @@ impl Shared {
         self.state.lock().unwrap_or_else(|p| p.into_inner())
     }
 
-    /// The instant a handler acts at: its simulated time on the bus's simulated time (so a
-    /// query is answered with the leg as it is then, part-way through a move), else now.
-    fn now(&self, ctx: &Context) -> Instant {
-        match self.clock {
-            Some(epoch) => epoch + Duration::from_nanos(ctx.time_ns()),
-            None => Instant::now(),
+    /// The instant a handler acts at, and the pace moves play out at. On central's simulated
+    /// clock: the handler's simulated time, one simulated second a second (so a query is
+    /// answered with the leg as it is then, part-way through a move). Otherwise: now, at the
+    /// configured pace.
+    fn now(&self, ctx: &Context) -> (Instant, SpeedFactor) {
+        if ctx.on_central_clock() {
+            (
+                self.epoch + Duration::from_nanos(ctx.time_ns()),
+                SpeedFactor::Times(1.0),
+            )
+        } else {
+            (Instant::now(), self.pace)
         }
     }
 
+    /// The state as of the handler's time (the Controller put on that handler's time base).
+    fn at(&self, ctx: &Context) -> (MutexGuard<'_, Controller>, Instant) {
+        let (now, timeline) = self.now(ctx);
+        let mut state = self.lock();
+        state.set_timeline(timeline, now);
+        (state, now)
+    }
+
     fn snapshot(&self, ctx: &Context) -> Snapshot {
-        let now = self.now(ctx);
-        self.lock().snapshot(now)
+        let (state, now) = self.at(ctx);
+        state.snapshot(now)
     }
 
     /// Runs a command: simulate, wait its wall-clock time, then raise and end.
@@ -228,9 +239,9 @@ impl Shared {
             tracing::info!(id = %ctx.message_id(), "redelivered command was carried out before; answering with its outcome");
             return self.end(ctx, outcome);
         }
-        let started = self.now(ctx);
+        let on_clock = ctx.on_central_clock();
         let run = {
-            let mut state = self.lock();
+            let (mut state, started) = self.at(ctx);
             let run = start(&mut state, started);
             if let Some(p) = &self.persistence {
                 let mut p = p.lock().unwrap_or_else(|e| e.into_inner());
@@ -246,17 +257,18 @@ impl Shared {
             ok = run.outcome.is_ok(),
             "controller command"
         );
-        // The move plays out: in wall-clock time, or (on simulated time) at its pace while
-        // its end is stamped its simulated duration later.
-        let (wait, ended) = match self.clock {
-            Some(_) => (self.pace.wall_time(run.simulated), started + run.simulated),
-            None => (run.wall, started + run.wall),
+        // The move plays out: in wall-clock time, or (on central's simulated clock) at its
+        // pace while its end is stamped its simulated duration later.
+        let wait = if on_clock {
+            self.pace.wall_time(run.simulated)
+        } else {
+            run.wall
         };
         if !wait.is_zero() {
             tokio::time::sleep(wait).await;
         }
-        let ended = if self.clock.is_some() {
-            ended
+        let ended = if on_clock {
+            run.started + run.simulated
         } else {
             Instant::now()
         };

@@ -68,9 +68,13 @@ impl ComputeModel {
     pub const PAPER_REACHABILITY_S: u64 = 1;
     /// What the LTM Manager charges under [`ComputeModel::Paper`] for any `mapRegion`, ms.
     pub const PAPER_LTM_BASE_MS: u64 = 500;
-    /// What the LTM Manager charges under [`ComputeModel::Paper`] per image cell merged and
-    /// per map cell computed (a cached cell costs nothing), µs.
-    pub const PAPER_LTM_PER_CELL_US: u64 = 20;
+    /// What the LTM Manager charges under [`ComputeModel::Paper`] per map cell computed (a
+    /// cached cell costs nothing), µs; an image cell merged costs a quarter of that. Fitted to
+    /// the report's Figure 18 (the 1990 LTM Manager's map computing was most of a step's
+    /// planning time: the first map, from scratch, most of the first step's minute; later
+    /// maps reuse the cache): on course 3 it charges about 45 s for the first step and 25 to
+    /// 30 s for each later one (BENCHMARKS.md).
+    pub const PAPER_LTM_PER_CELL_US: u64 = 2000;
     /// Simulated seconds the PDM charges per picture under [`ComputeModel::Paper`].
     pub const PAPER_PDM_S: u64 = 1;
 

@@ -91,6 +91,9 @@ pub struct WalkReport {
     /// Wall-clock planning time per step (Gait Planner and Leg Recovery Planner computing),
     /// milliseconds (from the log; in-process only).
     pub planning_ms_per_step: Option<f64>,
+    /// Simulated seconds at which each step's body move ended, in order (from the log;
+    /// in-process only).
+    pub step_ends_s: Vec<f64>,
     /// Where the carriage started and ended.
     pub start_y_m: f64,
     /// Where the carriage ended.
@@ -263,6 +266,7 @@ pub async fn walk(
         sim_time_s,
         wall_time_s,
         planning_ms_per_step: None,
+        step_ends_s: Vec::new(),
         start_y_m: start_y,
         final_y_m: final_y,
         legs,
