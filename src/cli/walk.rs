@@ -18,7 +18,7 @@ pub(crate) struct WalkArgs {
     #[arg(long, value_name = "FILE.asc")]
     terrain: Option<PathBuf>,
     /// Carriage goal along the rails, metres (the rails run from 0.5 to 10.5 m).
-    #[arg(long, value_name = "METRES")]
+    #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
     goal: Option<f64>,
     /// Then walk back to the start, using the maps made walking forward.
     #[arg(long)]

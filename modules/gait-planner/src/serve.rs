@@ -104,7 +104,7 @@ pub async fn connect(connector: &Connector, config: GaitConfig) -> Result<Module
             let shared = shared.clone();
             async move { shared.plan_step(&ctx, step).await }
         });
-    crate::walk::register(builder, walks, config.max_replans)
+    crate::walk::register(builder, walks, config.max_replans, config.leg.rails)
         .connect(connector)
         .await
 }

@@ -5,9 +5,9 @@
 //!
 //! - **sequential**: step k+1 is planned only after step k's body move is achieved
 //!   (`delay_planning(bodyMove k, planStep k+1)`);
-//! - **concurrent**: step k+1 is planned at once, from where step k will leave the carriage
-//!   and the foot, while step k executes; its leg move waits for step k's body move
-//!   (`delay_planning(bodyMove k, recoverLeg k+1)`).
+//! - **concurrent**: step k+1 is planned while step k executes, from where step k will leave
+//!   the carriage and the foot; its planning waits for step k-1's body move (what the scanner
+//!   sees from where the carriage stands), and its leg move for step k's body move.
 //!
 //! In both, each leg move is achieved before its body move starts.
 //!
@@ -22,6 +22,7 @@ use std::sync::{Arc, Mutex};
 
 use tca_messages::{MessageId, NodeId};
 use tca_module::{ConstraintSpec, Context, HandlerError, ModuleBuilder, Task, TaskRef};
+use tca_robot::RailParams;
 use tca_single_leg_messages::{
     HardwareFault, MoveFailed, PlanStep, StepStart, Walk, WalkMode, WorldPoint,
 };
@@ -75,12 +76,17 @@ impl Walks {
 }
 
 /// Registers the `walk` goal and the exception handlers on a Gait Planner module builder.
-pub fn register(builder: ModuleBuilder, walks: Walks, max_replans: u32) -> ModuleBuilder {
+pub fn register(
+    builder: ModuleBuilder,
+    walks: Walks,
+    max_replans: u32,
+    rails: RailParams,
+) -> ModuleBuilder {
     let (w1, w2) = (walks.clone(), walks);
     builder
         .handle(move |ctx: Context, walk: Walk| {
             let walks = w1.clone();
-            async move { start_walk(&ctx, walk, &walks).await }
+            async move { start_walk(&ctx, walk, &walks, &rails).await }
         })
         .handle(move |ctx: Context, failure: MoveFailed| {
             let walks = w2.clone();
@@ -97,10 +103,13 @@ pub fn register(builder: ModuleBuilder, walks: Walks, max_replans: u32) -> Modul
         })
 }
 
-async fn start_walk(ctx: &Context, walk: Walk, walks: &Walks) -> Result<(), HandlerError> {
-    if !walk.goal_y_m.is_finite() {
-        return Err(HandlerError::new("the walk's goal is not a finite number"));
-    }
+async fn start_walk(
+    ctx: &Context,
+    walk: Walk,
+    walks: &Walks,
+    rails: &RailParams,
+) -> Result<(), HandlerError> {
+    check_goal(walk.goal_y_m, rails).map_err(HandlerError::new)?;
     let node = ctx
         .node()
         .ok_or_else(|| HandlerError::new("a walk must be a task (sent as a goal)"))?;
@@ -125,6 +134,26 @@ async fn start_walk(ctx: &Context, walk: Walk, walks: &Walks) -> Result<(), Hand
         start: None,
         after_body_move: None,
     })?;
+    Ok(())
+}
+
+/// Whether the carriage can stand at `goal_y_m` on `rails`; if not, says why and what goal to
+/// give instead.
+pub fn check_goal(goal_y_m: f64, rails: &RailParams) -> Result<(), String> {
+    if !goal_y_m.is_finite() {
+        return Err(format!(
+            "the walk's goal {goal_y_m} is not a number of metres; give a carriage position \
+             between {:.2} and {:.2} m",
+            rails.y_min_m, rails.y_max_m
+        ));
+    }
+    if goal_y_m < rails.y_min_m || goal_y_m > rails.y_max_m {
+        return Err(format!(
+            "the goal y = {goal_y_m:.3} m is off the rails, which run from {:.2} to {:.2} m; \
+             give a goal between them",
+            rails.y_min_m, rails.y_max_m
+        ));
+    }
     Ok(())
 }
 
@@ -215,4 +244,21 @@ async fn replan(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn goals_off_the_rails_or_not_numbers_are_refused_with_the_range() {
+        let rails = tca_robot::LegParams::default().rails;
+        for ok in [rails.y_min_m, 5.0, rails.y_max_m] {
+            assert!(check_goal(ok, &rails).is_ok(), "{ok}");
+        }
+        for bad in [100.0, 0.2, -1.0, f64::NAN, f64::INFINITY] {
+            let e = check_goal(bad, &rails).unwrap_err();
+            assert!(e.contains("0.50") && e.contains("10.50"), "{bad}: {e}");
+        }
+    }
 }

@@ -128,9 +128,10 @@ pub async fn walk(
 ) -> anyhow::Result<WalkReport> {
     let started = Instant::now();
     let goal = options.goal_y_m.unwrap_or(DEFAULT_GOAL_Y_M);
-    if !goal.is_finite() {
-        anyhow::bail!("--goal must be a number of metres");
-    }
+    // Refused before anything starts (a system joined with `--connect` refuses it too: the
+    // Gait Planner checks every walk goal against its rails).
+    let rails = tca_robot::LegParams::default().rails;
+    tca_gait_planner::walk::check_goal(goal, &rails).map_err(|reason| anyhow::anyhow!(reason))?;
     let mut setup = SystemSetup::new(options.terrain.clone(), options.seed)?;
     setup.compute = options.compute;
     // In-process: central and every module here; else only the walker joins a running system.
