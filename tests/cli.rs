@@ -187,7 +187,13 @@ fn bad_input_gets_clear_errors() {
 
     // A goal off the rails is refused before anything walks.
     for goal in ["100", "0.2", "-3"] {
-        let out = tca(&["walk", "--goal", goal, "--out", dir.path().to_str().unwrap()]);
+        let out = tca(&[
+            "walk",
+            "--goal",
+            goal,
+            "--out",
+            dir.path().to_str().unwrap(),
+        ]);
         assert_eq!(out.status.code(), Some(1), "--goal {goal}");
         assert!(
             stderr(&out).contains("off the rails, which run from 0.50 to 10.50 m"),
@@ -210,6 +216,10 @@ fn a_normal_walk_prints_no_warnings() {
         for bad in ["WARN", "ERROR", "warning"] {
             assert!(!err.contains(bad), "{mode:?}: {bad} in\n{err}");
         }
-        assert!(stdout(&out).contains("reached the goal"), "{}", stdout(&out));
+        assert!(
+            stdout(&out).contains("reached the goal"),
+            "{}",
+            stdout(&out)
+        );
     }
 }

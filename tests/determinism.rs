@@ -59,6 +59,7 @@ async fn walk_to(dir: &Path, mode: WalkMode) {
         step_pictures: false,
         connect: None,
         compute: ComputeModel::Paper,
+        fault: None,
     };
     let (tx, _rx) = mpsc::unbounded_channel();
     let report = within("walk", tca_walk::walk(&options, tx))

@@ -4,6 +4,7 @@
 mod common;
 
 use common::within;
+use tca_controller_sim::sim::ScheduledFault;
 use tca_single_leg_messages::WalkMode;
 use tca_walk::{ComputeModel, TerrainChoice, WalkOptions, WalkReport};
 use tokio::sync::mpsc;
@@ -19,6 +20,7 @@ fn options(terrain: TerrainChoice, seed: u64) -> WalkOptions {
         step_pictures: false,
         connect: None,
         compute: ComputeModel::Paper,
+        fault: None,
     }
 }
 
@@ -142,4 +144,54 @@ async fn an_impassable_course_stops_safely_and_says_why() {
     assert_eq!(report.collisions, 0, "{report:#?}");
     assert!(report.reason.is_some());
     assert!(report.final_y_m < 4.0);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_slip_is_replanned_from_where_the_leg_is_and_the_walk_goes_on() {
+    let clean = walk(options(TerrainChoice::Course(3), 1)).await;
+    assert_clean(&clean);
+    for mode in [WalkMode::Sequential, WalkMode::Concurrent] {
+        let report = walk(WalkOptions {
+            mode,
+            fault: Some(ScheduledFault::parse("slip@3").unwrap()),
+            ..options(TerrainChoice::Course(3), 1)
+        })
+        .await;
+        assert_clean(&report);
+        // The slipped step is planned again (concurrently, the step planned ahead of it is
+        // planned again too): more steps than the clean walk.
+        assert!(report.steps > clean.steps, "{mode:?}: {report:#?}");
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_hardware_fault_halts_the_walk_with_the_reason() {
+    for (fault, mode, says) in [
+        (
+            "force-drop@2",
+            WalkMode::Sequential,
+            "the foot force dropped",
+        ),
+        (
+            "limit-switch@4",
+            WalkMode::Concurrent,
+            "limit switch tripped",
+        ),
+    ] {
+        let report = walk(WalkOptions {
+            mode,
+            fault: Some(ScheduledFault::parse(fault).unwrap()),
+            ..options(TerrainChoice::Course(3), 1)
+        })
+        .await;
+        assert!(!report.reached, "{fault}: {report:#?}");
+        assert_eq!(report.collisions, 0, "{fault}");
+        let reason = report.reason.clone().unwrap_or_default();
+        assert!(
+            reason.contains(says) && reason.contains("the walk was halted"),
+            "{fault}: {reason}"
+        );
+        // Halted during the faulty step's body move: no further step was taken.
+        assert!(report.final_y_m < 9.0, "{fault}: {report:#?}");
+    }
 }

@@ -610,6 +610,18 @@ impl Central {
         out: &mut Vec<Action>,
     ) {
         tracing::warn!(?link, ?module, %error, "bad input");
+        self.record_problem(link, module, error, frame, out);
+    }
+
+    /// Logs a problem (a `Problem` record in the traffic log) without printing it.
+    fn record_problem(
+        &mut self,
+        link: Option<LinkId>,
+        module: Option<ModuleName>,
+        error: String,
+        frame: &[u8],
+        out: &mut Vec<Action>,
+    ) {
         out.push(Action::Log(LogRecord {
             at_ns: self.now,
             kind: RecordKind::Problem(ProblemRecord {

@@ -290,6 +290,7 @@ async fn one_walk(
         step_pictures: false,
         connect: Some(endpoint.to_owned()),
         compute: options.compute,
+        fault: None,
     };
     let (tx, mut rx) = mpsc::unbounded_channel();
     let mut walk = tokio::spawn(async move { tca_walk::walk(&walk_options, tx).await });

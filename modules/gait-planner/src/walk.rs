@@ -93,7 +93,7 @@ pub fn register(
             async move { replan(&ctx, failure, &walks, max_replans).await }
         })
         .handle(|_ctx: Context, fault: HardwareFault| async move {
-            tracing::error!(detail = %fault.detail, "hardware fault: halting the walk");
+            tracing::info!(detail = %fault.detail, "hardware fault: halting the walk");
             // Passed up: nobody above handles it, so central kills the whole tree and tells
             // the user why.
             Err::<(), _>(HandlerError::new(format!(
@@ -217,7 +217,7 @@ async fn replan(
         state.first_live_step = state.steps_sent;
         (state.clone(), std::mem::take(&mut state.live_steps))
     };
-    tracing::warn!(
+    tracing::info!(
         command = %failure.command,
         kind = ?failure.kind,
         detail = %failure.detail,
@@ -230,7 +230,9 @@ async fn replan(
             state.replans, failure.command, failure.kind, failure.detail
         )));
     }
-    // Patch first (a new step under the walk), then kill the steps in progress.
+    // Patch first (a new step under the walk), then kill the steps in progress, newest
+    // first: killing a step releases what waits on its body move, so a step planned ahead
+    // from where the failed one would have left the leg must be gone before that.
     ctx.goal(&PlanStep {
         step: state.steps_sent,
         goal_y_m: state.goal_y_m,
@@ -238,7 +240,7 @@ async fn replan(
         start: None,
         after_body_move: None,
     })?;
-    for step in old_steps {
+    for step in old_steps.into_iter().rev() {
         if let Err(e) = ctx.kill(step).await {
             tracing::debug!(%step, %e, "step already finished");
         }

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
+use tca_controller_sim::sim::FaultConfig;
 use tca_controller_sim::{ControllerConfig, SpeedFactor};
 use tca_gait_planner::GaitConfig;
 use tca_ism::IsmConfig;
@@ -40,6 +41,8 @@ pub struct SystemSetup {
     pub state_dir: Option<PathBuf>,
     /// Run the Gait Planner with these parameters instead of the shipped ones.
     pub gait_params: Option<tca_gait_planner::GaitParams>,
+    /// Faults the simulated Controller injects.
+    pub faults: FaultConfig,
 }
 
 /// What the planners charge to simulated time for their computing.
@@ -130,6 +133,7 @@ impl SystemSetup {
             compute: ComputeModel::default(),
             state_dir: None,
             gait_params: None,
+            faults: FaultConfig::none(),
         })
     }
 
@@ -157,8 +161,9 @@ pub async fn connect_module(
     match name {
         "controller" => {
             let start = find_start(&setup.terrain, &params, START_Y_M).map_err(config)?;
-            let mut config =
-                ControllerConfig::new((*setup.terrain).clone(), start).with_speed(setup.speed);
+            let mut config = ControllerConfig::new((*setup.terrain).clone(), start)
+                .with_speed(setup.speed)
+                .with_faults(setup.faults);
             config.bus_simulated_time = true;
             config.state_file = setup.state_dir.as_ref().map(|d| d.join("controller.state"));
             tca_controller_sim::connect(connector, config).await

@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context as _;
 use serde::Serialize;
 use tca_central::StartOptions;
+use tca_controller_sim::sim::ScheduledFault;
 use tca_messages::control::TaskOutcome;
 use tca_module::{Connector, Module};
 use tca_single_leg_messages::{
@@ -46,6 +47,8 @@ pub struct WalkOptions {
     /// What the planners charge to simulated time (in-process only; modules running
     /// elsewhere were started with their own).
     pub compute: ComputeModel,
+    /// Inject this fault in the simulated Controller (in-process only).
+    pub fault: Option<ScheduledFault>,
 }
 
 /// One leg of a walk (forward, or back).
@@ -134,6 +137,15 @@ pub async fn walk(
     tca_gait_planner::walk::check_goal(goal, &rails).map_err(|reason| anyhow::anyhow!(reason))?;
     let mut setup = SystemSetup::new(options.terrain.clone(), options.seed)?;
     setup.compute = options.compute;
+    if let Some(fault) = options.fault {
+        if options.connect.is_some() {
+            anyhow::bail!(
+                "a fault is injected in the walk's own simulated Controller, so it cannot be \
+                 given with --connect; walk in-process to inject {fault}"
+            );
+        }
+        setup.faults.scheduled = Some(fault);
+    }
     // In-process: central and every module here; else only the walker joins a running system.
     let (central, connector, _modules, log_path) = match &options.connect {
         Some(endpoint) => (None, Connector::zenoh(endpoint.clone()), Vec::new(), None),
