@@ -60,12 +60,16 @@ impl Central {
         let parent = match envelope.context {
             Some(n) if self.tree.contains(n.0) => Some(n.0),
             Some(n) => {
+                // Its handler's task was killed (or has finished) meanwhile: what the handler
+                // still sent is not carried out. A root task in its place would act for a plan
+                // that no longer exists (a leg move planned from where the leg no longer is).
                 let reason = format!(
-                    "context node {n} of {} {} is not live; the task becomes a root",
+                    "{} {} was sent in the context of task node {n}, which is no longer live \
+                     (killed or finished); it was not started",
                     envelope.class, envelope.id
                 );
-                self.problem(Some(link), Some(sender.clone()), reason, &[], out);
-                None
+                tracing::debug!(%reason, sender = %sender, "task refused");
+                return self.send_error(link, &envelope, RouteError::Tree { reason }, out);
             }
             None => None,
         };

@@ -804,3 +804,25 @@ fn the_policy_refuses_strangers_and_sends_outside_the_rules_without_routing_them
     ));
     assert_eq!(h.central.counters().not_permitted, 3);
 }
+
+#[test]
+fn a_task_sent_from_a_killed_task_is_not_started() {
+    let mut h = Harness::new();
+    h.connect(1, "user", 1);
+    h.connect(2, "lrp", 4);
+    h.connect(3, "ctl", 1);
+    h.register::<Target>(2, "lrp", "step", Class::Goal, false);
+    h.register::<Target>(3, "ctl", "moveArm", Class::Command, false);
+    let (_step, sent) = task(&mut h, 1, "user", Class::Goal, "step", None, false);
+    let s = sent[0].1.node.unwrap();
+    control_msg(&mut h, 1, "user", names::KILL, &control::Kill { node: s });
+    // The step's handler, not yet told it was killed, still sends its leg move.
+    let (_leg, sent) = task(&mut h, 2, "lrp", Class::Command, "moveArm", Some(s), false);
+    assert!(
+        sent.iter().all(|(link, _)| *link != 3),
+        "the controller got {sent:?}"
+    );
+    let err = error_of(&sent.iter().find(|(l, _)| *l == 2).expect("lrp told").1);
+    assert!(err.to_string().contains("no longer live"), "{err}");
+    assert_eq!(h.central.live_nodes(), 0);
+}
