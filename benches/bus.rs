@@ -265,6 +265,7 @@ fn core_cost(c: &mut Criterion) {
             context: None,
             node: None,
             correlation: None,
+            cause: None,
             timestamp_ns: now,
             options: SendOptions::default(),
             redelivery: 0,
@@ -277,6 +278,7 @@ fn core_cost(c: &mut Criterion) {
             capacity: 1,
             pid: 0,
             host: "bench".into(),
+            simulated_time: false,
         };
         let e = env(
             0,

@@ -32,6 +32,7 @@ async fn chaos(args: &[&str]) -> (serde_json::Value, String) {
         audit_out.contains("no message lost, none handled twice"),
         "{audit_out}"
     );
+    assert!(audit_out.contains("time kept"), "{audit_out}");
     (report, stderr)
 }
 
@@ -55,6 +56,11 @@ fn check(report: &serde_json::Value, walks: usize, kills: usize) {
             .is_empty()
     );
     assert!(report["audit"]["tasks"].as_u64().unwrap() > 0);
+    assert!(
+        report["time"]["violations"].as_array().unwrap().is_empty(),
+        "{report}"
+    );
+    assert!(report["time"]["constraints"].as_u64().unwrap() > 0);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -184,4 +184,42 @@ fn bad_input_gets_clear_errors() {
     let out = tca(&["ping", "-n", "0"]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("at least 1"), "{}", stderr(&out));
+
+    // A goal off the rails is refused before anything walks.
+    for goal in ["100", "0.2", "-3"] {
+        let out = tca(&[
+            "walk",
+            "--goal",
+            goal,
+            "--out",
+            dir.path().to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(1), "--goal {goal}");
+        assert!(
+            stderr(&out).contains("off the rails, which run from 0.50 to 10.50 m"),
+            "--goal {goal}: {}",
+            stderr(&out)
+        );
+        assert!(!stderr(&out).contains("step  1"), "{}", stderr(&out));
+    }
+}
+
+#[test]
+fn a_normal_walk_prints_no_warnings() {
+    let dir = tempfile::tempdir().unwrap();
+    for mode in [&[][..], &["--concurrent"][..]] {
+        let mut args = vec!["walk", "--backward", "--out", dir.path().to_str().unwrap()];
+        args.extend_from_slice(mode);
+        let out = tca(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let err = stderr(&out);
+        for bad in ["WARN", "ERROR", "warning"] {
+            assert!(!err.contains(bad), "{mode:?}: {bad} in\n{err}");
+        }
+        assert!(
+            stdout(&out).contains("reached the goal"),
+            "{}",
+            stdout(&out)
+        );
+    }
 }

@@ -1,6 +1,8 @@
-//! The same sequential walk, twice, gives the same traffic log: every frame in the same order,
-//! with the same data and the same simulated stamps (each module's computing is modelled under
-//! `--compute paper`, so nothing in the log depends on how fast this machine is).
+//! The same walk, twice, gives the same traffic log: every frame in the same order, with the
+//! same data and the same simulated stamps, sequential and concurrent (central releases every
+//! message in simulated-time order, one at a time, and each module's computing is modelled
+//! under `--compute paper`, so nothing in the log depends on how fast this machine is or how
+//! its threads are scheduled).
 
 mod common;
 
@@ -46,17 +48,18 @@ fn frames(path: &Path) -> Vec<String> {
         .collect()
 }
 
-async fn walk_to(dir: &Path) {
+async fn walk_to(dir: &Path, mode: WalkMode) {
     let options = WalkOptions {
         terrain: TerrainChoice::Course(3),
         goal_y_m: None,
         backward: false,
-        mode: WalkMode::Sequential,
+        mode,
         seed: 1,
         out: Some(dir.to_owned()),
         step_pictures: false,
         connect: None,
         compute: ComputeModel::Paper,
+        fault: None,
     };
     let (tx, _rx) = mpsc::unbounded_channel();
     let report = within("walk", tca_walk::walk(&options, tx))
@@ -65,12 +68,12 @@ async fn walk_to(dir: &Path) {
     assert!(report.reached, "{report:#?}");
 }
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn the_same_sequential_walk_twice_gives_the_same_log() {
+/// Walks twice in `mode` and compares the logs.
+async fn twice(mode: WalkMode) {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
-    walk_to(&a).await;
-    walk_to(&b).await;
+    walk_to(&a, mode).await;
+    walk_to(&b, mode).await;
     let (fa, fb) = (
         frames(&a.join("traffic.mcap")),
         frames(&b.join("traffic.mcap")),
@@ -78,11 +81,21 @@ async fn the_same_sequential_walk_twice_gives_the_same_log() {
     assert!(fa.len() > 100, "{} frames", fa.len());
     if let Some(i) = fa.iter().zip(&fb).position(|(x, y)| x != y) {
         panic!(
-            "the logs part at frame {i} of {}:\nfirst:  {}\nsecond: {}",
+            "{mode:?}: the logs part at frame {i} of {}:\nfirst:  {}\nsecond: {}",
             fa.len(),
             fa[i],
             fb[i]
         );
     }
-    assert_eq!(fa.len(), fb.len(), "one log is longer");
+    assert_eq!(fa.len(), fb.len(), "{mode:?}: one log is longer");
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_same_sequential_walk_twice_gives_the_same_log() {
+    twice(WalkMode::Sequential).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_same_concurrent_walk_twice_gives_the_same_log() {
+    twice(WalkMode::Concurrent).await;
 }

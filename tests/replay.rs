@@ -24,7 +24,12 @@ fn text(bytes: &[u8]) -> String {
 
 /// Records `tca walk --course 4 --seed 1` (sequential) into `dir`; returns the log's path.
 fn record(dir: &Path) -> PathBuf {
-    let out = tca(&[
+    record_with(dir, &[])
+}
+
+/// Records `tca walk --course 4 --seed 1 EXTRA` into `dir`; returns the log's path.
+fn record_with(dir: &Path, extra: &[&str]) -> PathBuf {
+    let mut args = vec![
         "walk",
         "--course",
         "4",
@@ -32,7 +37,9 @@ fn record(dir: &Path) -> PathBuf {
         "1",
         "--out",
         dir.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    let out = tca(&args);
     assert!(
         out.status.success(),
         "the walk to record failed:\n{}{}",
@@ -145,6 +152,34 @@ fn other_gait_weights_diverge_and_the_divergence_names_message_and_field() {
     std::fs::write(&params, shipped).unwrap();
     let out = replay(&log, &["--gait-params", params.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(0), "{}", text(&out.stdout));
+}
+
+#[test]
+fn a_recorded_concurrent_walk_replays_exactly_and_diverges_with_other_weights() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = record_with(dir.path(), &["--concurrent"]);
+    let out = replay(&log, &["--json"]);
+    let stdout = text(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}{}", text(&out.stderr));
+    let report = last_json(&out);
+    assert_eq!(report["all_match"], true, "{report}");
+    assert!(report["compared"].as_u64().unwrap() > 50, "{report}");
+    assert_eq!(report["goals"][0]["live"], "achieved", "{report}");
+    assert_eq!(
+        report["goals"][0]["recorded_sim_s"], report["goals"][0]["live_sim_s"],
+        "the replayed walk ends at the recorded simulated time: {report}"
+    );
+    let shipped = include_str!("../modules/gait-planner/params/gait.toml");
+    let params = dir.path().join("gait.toml");
+    std::fs::write(
+        &params,
+        shipped.replace("\nfootfall = 4.0\n", "\nfootfall = 0.5\n"),
+    )
+    .unwrap();
+    let out = replay(&log, &["--gait-params", params.to_str().unwrap()]);
+    let stdout = text(&out.stdout);
+    assert_eq!(out.status.code(), Some(1), "{stdout}{}", text(&out.stderr));
+    assert!(stdout.contains("first divergence: gait -> "), "{stdout}");
 }
 
 fn assert_refused(out: &Output, expected: &str) {

@@ -79,6 +79,12 @@ pub struct CentralConfig {
     /// Who may connect, register and send (None: everyone may do everything).
     #[serde(skip)]
     pub policy: Option<Arc<Policy>>,
+    /// Keep the system's simulated clock (a discrete-event clock): release messages in
+    /// simulated-time order, one at a time, and move the clock on only when every handler of
+    /// a simulated module has finished or waits for an answer. Off (the default), messages
+    /// are routed as they arrive, on the wall clock, as a real robot's system needs. See
+    /// `core::clock`.
+    pub simulated_time: bool,
 }
 
 impl Default for CentralConfig {
@@ -101,6 +107,7 @@ impl Default for CentralConfig {
             // About 20 to 30 MB of records (each holds its frame).
             max_log_backlog: 1 << 17,
             policy: None,
+            simulated_time: false,
         }
     }
 }

@@ -31,6 +31,7 @@ fn frame_claiming_4gb() -> Vec<u8> {
         context: None,
         node: None,
         correlation: None,
+        cause: None,
         timestamp_ns: 0,
         options: SendOptions::default(),
         redelivery: 0,

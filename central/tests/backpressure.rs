@@ -43,6 +43,7 @@ impl Raw {
             capacity: 1,
             pid: 0,
             host: "test".into(),
+            simulated_time: false,
         };
         let mut env = raw.envelope(Class::Control, names::HELLO, encode_data(&hello).unwrap());
         env.id = MessageId::new(0, 0);
@@ -75,6 +76,7 @@ impl Raw {
             context: None,
             node: None,
             correlation: None,
+            cause: None,
             timestamp_ns: 1,
             options: SendOptions::default(),
             redelivery: 0,

@@ -51,6 +51,7 @@ fn envelope(link: u32, seq: u32, class: Class, msg: &str, module: &str, data: Ve
         context: None,
         node: None,
         correlation: None,
+        cause: None,
         timestamp_ns: 1_000,
         options: SendOptions::default(),
         redelivery: 0,
@@ -64,6 +65,7 @@ fn hello(module: &str) -> Hello {
         capacity: 1,
         pid: 1,
         host: "h".into(),
+        simulated_time: false,
     }
 }
 

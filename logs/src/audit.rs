@@ -356,6 +356,7 @@ mod tests {
                 context: None,
                 node: None,
                 correlation,
+                cause: None,
                 timestamp_ns: 0,
                 options: SendOptions::default(),
                 redelivery,

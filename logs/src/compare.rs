@@ -655,6 +655,7 @@ mod tests {
             context: Some(NodeId(1)),
             node: None,
             correlation: None,
+            cause: None,
             timestamp_ns: id.0,
             options: SendOptions::default(),
             redelivery: 0,

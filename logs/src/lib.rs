@@ -17,6 +17,7 @@
 //! - [`export`]: a JSON-encoded copy of a log for Foxglove Studio.
 //! - [`script`]: what one module did in a recorded run, as a script to play it back.
 //! - [`audit`](mod@audit): lost and doubly handled messages, proved from the log.
+//! - [`timecheck`]: constraints, capacity and answer stamps held in time, proved from the log.
 //! - [`compare`](mod@compare): comparing what modules sent in two runs, field by field (`tca log replay`).
 //! - [`error`][]: [`LogError`].
 
@@ -30,6 +31,7 @@ pub mod record;
 pub mod script;
 pub mod show;
 pub mod stats;
+pub mod timecheck;
 pub mod writer;
 
 pub use audit::{Audit, audit};
@@ -44,4 +46,5 @@ pub use record::{
 pub use script::{ModuleScript, RootTask, connection_order, module_script, root_tasks};
 pub use show::{ShowFilter, render, tree_at};
 pub use stats::{LogStats, ModuleStats, QueryStats, Span, TimeBase, stats};
+pub use timecheck::{TimeCheck, time_check};
 pub use writer::{FLUSH_INTERVAL, LogSink, LogWriter, set_aside};

@@ -411,6 +411,7 @@ mod tests {
                 context: context.map(NodeId),
                 node: node.map(NodeId),
                 correlation: correlation.map(|(l, s)| MessageId::new(l, s)),
+                cause: None,
                 timestamp_ns: t_ns,
                 options: SendOptions::default(),
                 redelivery: 0,

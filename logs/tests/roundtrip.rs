@@ -15,6 +15,7 @@ fn envelope(seq: u32, y: f64) -> Envelope {
         context: None,
         node: Some(NodeId(u64::from(seq))),
         correlation: None,
+        cause: None,
         timestamp_ns: 0,
         options: SendOptions::default(),
         redelivery: 0,

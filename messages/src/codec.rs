@@ -22,7 +22,7 @@ fn reason(e: postcard::Error) -> String {
 }
 
 /// Version of the frame layout; bumped on any incompatible change.
-pub const PROTOCOL_VERSION: u8 = 1;
+pub const PROTOCOL_VERSION: u8 = 2;
 
 /// Default limit on a frame's size (16 MiB), configurable in central and modules.
 pub const DEFAULT_MAX_FRAME_BYTES: usize = 16 << 20;

@@ -13,6 +13,7 @@ fn sample() -> Envelope {
         context: Some(NodeId(3)),
         node: None,
         correlation: None,
+        cause: None,
         timestamp_ns: 1_000,
         options: SendOptions::default(),
         redelivery: 0,
@@ -25,7 +26,7 @@ fn golden_bytes_of_a_frame() {
     // Any change to these bytes is a wire-protocol change: bump PROTOCOL_VERSION.
     let frame = encode(&sample()).unwrap();
     let expected: Vec<u8> = [
-        vec![1],                            // protocol version
+        vec![2],                            // protocol version
         vec![0x85, 0x80, 0x80, 0x80, 0x20], // id = 2 << 32 | 5, varint
         vec![2],                            // class Command
         vec![8],
@@ -35,6 +36,7 @@ fn golden_bytes_of_a_frame() {
         vec![1, 3],                            // context Some(n3)
         vec![0],                               // node None
         vec![0],                               // correlation None
+        vec![0],                               // cause None
         vec![0xe8, 0x07],                      // timestamp 1000
         vec![0, 0],                            // options: no constraints, notify false
         vec![0],                               // redelivery
@@ -117,6 +119,7 @@ prop_compose! {
             sender: ModuleName::new(sender).unwrap(),
             context: context.map(NodeId), node: node.map(NodeId),
             correlation: correlation.map(MessageId), timestamp_ns: ts,
+            cause: None,
             options: SendOptions {
                 constraints: constraints.into_iter()
                     .map(|(before, after)| ConstraintSpec { before, after }).collect(),
@@ -150,7 +153,7 @@ proptest! {
     #[test]
     fn control_payloads_round_trip(n in name(), cap in any::<u32>(), pid in any::<u32>()) {
         let hello = control::Hello {
-            module: ModuleName::new(n).unwrap(), capacity: cap, pid, host: "h".into(),
+            module: ModuleName::new(n).unwrap(), capacity: cap, pid, host: "h".into(), simulated_time: false,
         };
         let bytes = encode_data(&hello).unwrap();
         prop_assert_eq!(decode_data::<control::Hello>(&bytes).unwrap(), hello);

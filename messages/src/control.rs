@@ -46,6 +46,9 @@ pub mod names {
     pub const RETRY: &str = "tca.retry";
     /// Module -> central: monitor a node with a condition query ([`super::Monitor`]).
     pub const MONITOR: &str = "tca.monitor";
+    /// Module -> central, on simulated time: the sending handler now waits for the end of a
+    /// task ([`super::Await`]); no answer.
+    pub const AWAIT: &str = "tca.await";
 }
 
 /// Name of the pseudo-module central uses as sender of its own messages.
@@ -63,6 +66,10 @@ pub struct Hello {
     pub pid: u32,
     /// The module's host name, for diagnostics.
     pub host: String,
+    /// The module stamps its messages with simulated time. On a central that keeps simulated
+    /// time, central follows such a module's handlers (their queries and ends) to know when
+    /// the clock may move on.
+    pub simulated_time: bool,
 }
 
 /// Who a module says it is, checked by central against its policy file. The secret travels in
@@ -102,6 +109,10 @@ pub struct Welcome {
     pub link: u32,
     /// Central's version string.
     pub central_version: String,
+    /// Central keeps the system's simulated clock: it releases messages in simulated-time
+    /// order and follows each simulated module's handlers, which then tell it when an
+    /// inform's handler ended and when a handler waits for a task's end.
+    pub simulated_clock: bool,
 }
 
 /// One message a module offers to handle.
@@ -234,6 +245,15 @@ pub struct Monitor {
     pub action: MonitorAction,
 }
 
+/// The sending handler waits for the end of a goal or command it sent with notification (on
+/// a central that keeps simulated time, so that central knows the handler will send nothing
+/// more until that task's end reaches it).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Await {
+    /// The id of the message that created the task.
+    pub task: crate::id::MessageId,
+}
+
 /// Add a temporal constraint between existing nodes.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Constrain {
@@ -297,11 +317,13 @@ pub enum ControlKind {
     Retry,
     /// [`names::MONITOR`].
     Monitor,
+    /// [`names::AWAIT`].
+    Await,
 }
 
 impl ControlKind {
     /// Every kind of control request.
-    pub const ALL: [ControlKind; 11] = [
+    pub const ALL: [ControlKind; 12] = [
         ControlKind::Hello,
         ControlKind::HelloAuth,
         ControlKind::Register,
@@ -313,6 +335,7 @@ impl ControlKind {
         ControlKind::OnException,
         ControlKind::Retry,
         ControlKind::Monitor,
+        ControlKind::Await,
     ];
 
     /// The wire name.
@@ -329,6 +352,7 @@ impl ControlKind {
             ControlKind::OnException => names::ON_EXCEPTION,
             ControlKind::Retry => names::RETRY,
             ControlKind::Monitor => names::MONITOR,
+            ControlKind::Await => names::AWAIT,
         }
     }
 
@@ -342,10 +366,15 @@ impl ControlKind {
         matches!(self, ControlKind::Hello | ControlKind::HelloAuth)
     }
 
+    /// Whether central answers the request (all but [`ControlKind::Await`]).
+    pub fn is_answered(self) -> bool {
+        self != ControlKind::Await
+    }
+
     /// Whether the request acts on the task trees (kill, constrain, exception handlers, retry,
-    /// monitors). The others (hellos, registration, registry and tree inspection, goodbye) are
-    /// the link's bookkeeping: every connected module may send them without a policy rule, and
-    /// they move no module's simulated clock.
+    /// monitors). The others (hellos, registration, registry and tree inspection, goodbye, a
+    /// handler's await) are the link's bookkeeping: every connected module may send them
+    /// without a policy rule, and they move no module's simulated clock.
     pub fn acts_on_tasks(self) -> bool {
         matches!(
             self,
@@ -391,6 +420,8 @@ pub enum ControlRequest {
     Retry(Retry),
     /// Monitor a node with a condition query; answered with `()`.
     Monitor(Monitor),
+    /// The sending handler waits for a task's end (simulated time); not answered.
+    Await(Await),
 }
 
 /// Why a control request could not be read.
@@ -430,6 +461,7 @@ impl ControlRequest {
             ControlRequest::OnException(_) => ControlKind::OnException,
             ControlRequest::Retry(_) => ControlKind::Retry,
             ControlRequest::Monitor(_) => ControlKind::Monitor,
+            ControlRequest::Await(_) => ControlKind::Await,
         }
     }
 
@@ -451,6 +483,7 @@ impl ControlRequest {
             ControlRequest::OnException(o) => enc(o),
             ControlRequest::Retry(r) => enc(r),
             ControlRequest::Monitor(m) => enc(m),
+            ControlRequest::Await(a) => enc(a),
         }
     }
 
@@ -481,6 +514,7 @@ impl ControlRequest {
             ControlKind::OnException => ControlRequest::OnException(dec(kind, data)?),
             ControlKind::Retry => ControlRequest::Retry(dec(kind, data)?),
             ControlKind::Monitor => ControlRequest::Monitor(dec(kind, data)?),
+            ControlKind::Await => ControlRequest::Await(dec(kind, data)?),
         })
     }
 }

@@ -127,6 +127,10 @@ pub struct Envelope {
     pub node: Option<NodeId>,
     /// The message this one answers (reply, success, failure, error, control answers).
     pub correlation: Option<MessageId>,
+    /// The delivered message whose handler sent this one (`None` for what a module sends
+    /// outside its handlers). On simulated time central follows handlers by it: a handler
+    /// waiting for the answer to its query cannot send anything earlier.
+    pub cause: Option<MessageId>,
     /// When the sender sent it: nanoseconds since the UNIX epoch on the sender's clock.
     pub timestamp_ns: u64,
     /// Sender's options (constraints, notification).

@@ -55,6 +55,10 @@ pub(crate) struct CentralArgs {
     /// from modules until the writer is back under half.
     #[arg(long, default_value_t = CentralConfig::default().max_log_backlog)]
     max_log_backlog: u32,
+    /// Keep the system's simulated clock: release messages in simulated-time order (for
+    /// simulations such as the walking system; a real robot's system runs on the wall clock).
+    #[arg(long)]
+    simulated_time: bool,
 }
 
 pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
@@ -77,6 +81,7 @@ pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
             max_outbox_bytes: args.max_outbox_bytes,
             max_log_backlog: args.max_log_backlog,
             policy,
+            simulated_time: args.simulated_time,
             ..CentralConfig::default()
         },
         log: args.log.clone(),

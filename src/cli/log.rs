@@ -19,7 +19,8 @@ pub(crate) enum LogCommand {
     Stats(StatsArgs),
     /// Replay a recorded walk with some modules played from the log; report the first divergence.
     Replay(super::replay::ReplayArgs),
-    /// Prove from the log that no message was lost or handled twice (exit 1 if one was).
+    /// Prove from the log that no message was lost or handled twice, and that time was kept:
+    /// constraints, capacity and answer stamps (exit 1 if not).
     Audit(AuditArgs),
 }
 
@@ -92,17 +93,21 @@ pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
             let log = LogFile::open(&args.file)
                 .with_context(|| format!("cannot read log {}", args.file.display()))?;
             let audit = tca_logs::audit(&log);
+            let time = tca_logs::time_check(&log);
             if args.json {
-                println!("{}", serde_json::to_string(&audit)?);
+                let mut v = serde_json::to_value(&audit)?;
+                v["time"] = serde_json::to_value(&time)?;
+                println!("{v}");
             } else {
                 print!("{}", audit.text());
+                print!("{}", time.text());
                 if let Some(t) = &log.truncated {
                     println!(
                         "note: the log ends early ({t}); messages in flight then show as lost"
                     );
                 }
             }
-            Ok(if audit.is_clean() {
+            Ok(if audit.is_clean() && time.holds() {
                 ExitCode::SUCCESS
             } else {
                 ExitCode::from(1)

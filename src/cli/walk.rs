@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args;
+use tca_controller_sim::sim::ScheduledFault;
 use tca_single_leg_messages::WalkMode;
 use tca_walk::{Progress, TerrainChoice, WalkOptions};
 use tokio::sync::mpsc;
@@ -18,7 +19,7 @@ pub(crate) struct WalkArgs {
     #[arg(long, value_name = "FILE.asc")]
     terrain: Option<PathBuf>,
     /// Carriage goal along the rails, metres (the rails run from 0.5 to 10.5 m).
-    #[arg(long, value_name = "METRES")]
+    #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
     goal: Option<f64>,
     /// Then walk back to the start, using the maps made walking forward.
     #[arg(long)]
@@ -44,9 +45,20 @@ pub(crate) struct WalkArgs {
     /// machine's milliseconds).
     #[arg(long, value_enum, default_value_t = super::Compute::Paper)]
     compute: super::Compute,
+    /// Inject a fault in the simulated Controller during the body move of step STEP
+    /// (counting body moves from the start): `slip` (the foot slips; the Gait Planner
+    /// replans from where the leg is), `force-drop` (the foot force drops off) or
+    /// `limit-switch` (a limit switch trips); the last two are hardware faults that halt the
+    /// walk with the reason.
+    #[arg(long, value_name = "KIND@STEP", value_parser = parse_fault, conflicts_with = "connect")]
+    fault: Option<ScheduledFault>,
     /// Print the summary as one JSON object on the last line of stdout.
     #[arg(long)]
     json: bool,
+}
+
+fn parse_fault(text: &str) -> Result<ScheduledFault, String> {
+    ScheduledFault::parse(text)
 }
 
 pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
@@ -65,6 +77,7 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         step_pictures: args.pictures,
         connect: args.connect.clone(),
         compute: args.compute.into(),
+        fault: args.fault,
     };
     let (tx, rx) = mpsc::unbounded_channel();
     let display = tokio::spawn(show_progress(rx));

@@ -40,7 +40,7 @@ pub(super) struct OpenException {
     /// The module handling it now.
     handler: ModuleName,
     /// Why the handlers that passed it up did so.
-    passed: Vec<String>,
+    passed: Vec<(ModuleName, String)>,
 }
 
 impl Central {
@@ -70,7 +70,10 @@ impl Central {
 
     /// Suspends the raising node and routes the exception (also used by monitors).
     pub(super) fn raise_internal(&mut self, envelope: Envelope, node: u64, out: &mut Vec<Action>) {
-        if let Err(reason) = self.tree.suspend(node, self.now, Some(envelope.id.0), out) {
+        if let Err(reason) = self
+            .tree
+            .suspend(node, self.tree_now(), Some(envelope.id.0), out)
+        {
             self.problem(None, Some(envelope.sender.clone()), reason, &[], out);
         }
         tracing::info!(exception = %envelope.name, node, "exception raised");
@@ -83,7 +86,7 @@ impl Central {
         envelope: Envelope,
         raised_at: u64,
         from: Option<u64>,
-        passed: Vec<String>,
+        passed: Vec<(ModuleName, String)>,
         out: &mut Vec<Action>,
     ) {
         let mut chain: Vec<u64> = Vec::new();
@@ -149,7 +152,7 @@ impl Central {
             Err(reason) => {
                 // Passed up: go on above the node it was attached at.
                 let mut passed = open.passed;
-                passed.push(format!("{} passed it up: {reason}", open.handler));
+                passed.push((open.handler.clone(), reason));
                 let above = self.tree.ancestors(open.at).next();
                 match above {
                     Some(parent) => self.route_exception(
@@ -169,7 +172,7 @@ impl Central {
         if !self.tree.contains(node) {
             return; // killed or retired by the handler
         }
-        match self.tree.resume(node, self.now, Some(cause.0), out) {
+        match self.tree.resume(node, self.tree_now(), Some(cause.0), out) {
             Ok(events) => self.tree_events(events, out),
             Err(reason) => tracing::debug!(%reason, "resume after exception"),
         }
@@ -180,7 +183,7 @@ impl Central {
         &mut self,
         envelope: Envelope,
         raised_at: u64,
-        passed: &[String],
+        passed: &[(ModuleName, String)],
         out: &mut Vec<Action>,
     ) {
         let data = self
@@ -189,15 +192,25 @@ impl Central {
             .and_then(|e| e.format.decode_value(&envelope.data).ok())
             .map(|v| format!(": {v}"))
             .unwrap_or_default();
-        let mut reason = format!(
-            "unhandled exception {} raised by {} at node n{raised_at}{data}",
+        // The last handler's reason says most (it saw the exception in context); the
+        // exception itself and who passed it up follow.
+        let origin = format!(
+            "unhandled exception {} raised by {} at node n{raised_at}",
             envelope.name, envelope.sender
         );
-        for p in passed {
-            reason.push_str("; ");
-            reason.push_str(p);
-        }
-        tracing::warn!(%reason);
+        let reason = match passed.split_last() {
+            None => format!("{origin}{data}"),
+            Some((last, earlier)) => {
+                let mut handlers: Vec<&str> = earlier.iter().map(|(m, _)| m.as_str()).collect();
+                handlers.push(last.0.as_str());
+                format!(
+                    "{} ({origin}, passed up by {})",
+                    last.1,
+                    handlers.join(", ")
+                )
+            }
+        };
+        tracing::info!(%reason, "task tree failed");
         self.fail_tree_of(raised_at, &envelope, reason, out);
     }
 
@@ -208,8 +221,8 @@ impl Central {
         {
             task.failure = Some(reason.clone());
         }
-        self.problem(None, Some(cause.sender.clone()), reason, &[], out);
-        match self.tree.kill(root, self.now, Some(cause.id.0), out) {
+        self.record_problem(None, Some(cause.sender.clone()), reason, &[], out);
+        match self.tree.kill(root, self.tree_now(), Some(cause.id.0), out) {
             Ok(events) => self.tree_events(events, out),
             Err(reason) => tracing::debug!(%reason, "kill after unhandled exception"),
         }
@@ -250,7 +263,7 @@ impl Central {
     ) -> Result<(), String> {
         let events = self
             .tree
-            .retry(retry.node.0, self.now, Some(request.id.0), out)?;
+            .retry(retry.node.0, self.tree_now(), Some(request.id.0), out)?;
         if let Some(id) = self.node_task.get(&retry.node.0).copied()
             && let Some(t) = self.tasks.get_mut(&id)
         {

@@ -67,6 +67,7 @@ fn hello(link: u32) -> Envelope {
         context: None,
         node: None,
         correlation: None,
+        cause: None,
         timestamp_ns: 0,
         options: SendOptions::default(),
         redelivery: 0,
@@ -75,6 +76,7 @@ fn hello(link: u32) -> Envelope {
             capacity: link,
             pid: 0,
             host: String::new(),
+            simulated_time: false,
         })
         .unwrap(),
     }
@@ -141,6 +143,7 @@ proptest! {
                         context: context.map(NodeId),
                         node: None,
                         correlation: correlation.map(|c| MessageId::new(1 + c % 4, c)),
+                        cause: None,
                         timestamp_ns: now,
                         options: SendOptions::default(),
                         redelivery: 0,

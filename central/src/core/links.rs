@@ -124,6 +124,7 @@ impl Central {
         let welcome = ControlNotice::Welcome(Welcome {
             link,
             central_version: env!("CARGO_PKG_VERSION").to_owned(),
+            simulated_clock: self.config.simulated_time,
         });
         let reply = self.notice_envelope(&welcome, Some(envelope.id));
         self.send(link, &reply, out);
@@ -173,6 +174,10 @@ impl Central {
             for w in m.waiting.iter_mut() {
                 w.since_ns = now;
             }
+        }
+        // On the simulated clock, its handlers end and what was queued for it is handed back.
+        for envelope in self.clock.module_gone(&module) {
+            self.hand_back(&module, envelope);
         }
         self.fail_queries_of(&module, out);
         self.requeue_tasks_of(&module, out);

@@ -14,8 +14,11 @@
 //! - `quota`: per-sender accounting of what central holds, and its limits;
 //! - `congestion`: modules that do not keep up with what central sends them (their outbox);
 //! - `permissions`: the registration policy applied to what a module sends;
-//! - `tree`: the adapter to `tca-task-tree`.
+//! - `tree`: the adapter to `tca-task-tree`;
+//! - `clock`: the simulated clock, when central keeps one: events released in simulated-time
+//!   order, one at a time, while every handler has finished or waits.
 
+mod clock;
 mod congestion;
 mod event;
 mod exceptions;
@@ -59,6 +62,18 @@ use tca_link::OutboxLimits;
 use tree::Tree;
 use waiting::Waiting;
 
+/// Whether an envelope is an event of the simulated clock (released in simulated-time order)
+/// rather than bookkeeping answered at once.
+fn clock_event(envelope: &Envelope) -> bool {
+    match envelope.class {
+        Class::Control => {
+            ControlKind::from_name(envelope.name.as_str()).is_some_and(ControlKind::acts_on_tasks)
+        }
+        Class::Error => false,
+        _ => true,
+    }
+}
+
 /// Central control's state machine.
 pub struct Central {
     config: CentralConfig,
@@ -88,6 +103,8 @@ pub struct Central {
     /// capacity it satisfies) cannot have happened earlier on the sender's clock, which matters
     /// when modules run on simulated time.
     cause_stamp: u64,
+    /// The simulated clock and its event queue (off unless `simulated_time`).
+    clock: clock::SimClock,
     counters: Counters,
 }
 
@@ -145,6 +162,7 @@ impl Central {
     /// A central with the given configuration and no links.
     pub fn new(config: CentralConfig) -> Self {
         let outbox_limits = OutboxLimits::new(config.max_outbox_frames, config.max_outbox_bytes);
+        let clock = clock::SimClock::new(config.simulated_time);
         Central {
             config,
             links: HashMap::default(),
@@ -166,6 +184,7 @@ impl Central {
             seq: 0,
             now: 0,
             cause_stamp: 0,
+            clock,
             counters: Counters::default(),
         }
     }
@@ -197,6 +216,28 @@ impl Central {
             Event::OutboxLevel(link, used) => self.outbox_level(link, used, out),
             Event::OutboxFull(link, used) => self.outbox_full(link, used, out),
         }
+        self.pump(out);
+    }
+
+    /// The time task-tree operations happen at: the simulated clock's when central keeps one
+    /// (so that the tree, and the log of its operations, hold simulated times), else the wall
+    /// clock's.
+    fn tree_now(&self) -> u64 {
+        if self.clock.on {
+            self.clock.now
+        } else {
+            self.now
+        }
+    }
+
+    /// The simulated clock's time (nanoseconds), when central keeps one.
+    pub fn simulated_now(&self) -> Option<u64> {
+        self.clock.on.then_some(self.clock.now)
+    }
+
+    /// Events waiting for their simulated time, and handlers central follows.
+    pub fn simulated_backlog(&self) -> (usize, usize) {
+        (self.clock.queued(), self.clock.handlers())
     }
 
     /// When the core next needs a [`Event::Tick`], if ever.
@@ -297,6 +338,35 @@ impl Central {
         if let Err(error) = self.permit(link, &module, &envelope, out) {
             return self.send_error(link, &envelope, error, out);
         }
+        if self.clock.on {
+            if self.clock.sent(&envelope) {
+                // An inform's acknowledgement or a handler's await: bookkeeping only.
+                return;
+            }
+            if clock_event(&envelope) {
+                let stamp = self.clock.release_stamp(envelope.timestamp_ns);
+                self.clock.push(
+                    stamp,
+                    clock::Deferred::Frame {
+                        link,
+                        module,
+                        envelope,
+                    },
+                );
+                return;
+            }
+        }
+        self.route(link, module, envelope, out);
+    }
+
+    /// Routes an envelope by its class (at once, or when the simulated clock releases it).
+    fn route(
+        &mut self,
+        link: LinkId,
+        module: ModuleName,
+        envelope: Envelope,
+        out: &mut Vec<Action>,
+    ) {
         match envelope.class {
             Class::Query | Class::Inform => self.route_by_name(link, module, envelope, out),
             Class::Exception => self.raise(link, module, envelope, out),
@@ -314,6 +384,60 @@ impl Central {
                 let reason = format!("class {other} is not understood by this central");
                 self.send_error(link, &envelope, RouteError::BadFrame { reason }, out)
             }
+        }
+    }
+
+    /// Releases the simulated clock's events while the system is quiescent.
+    fn pump(&mut self, out: &mut Vec<Action>) {
+        if !self.clock.on {
+            return;
+        }
+        while let Some((now, event)) = self.clock.next() {
+            self.cause_stamp = now;
+            match event {
+                clock::Deferred::Frame {
+                    link,
+                    module,
+                    envelope,
+                } => self.route(link, module, envelope, out),
+                clock::Deferred::Deliver { module, envelope } => {
+                    self.release_delivery(module, envelope, out)
+                }
+                clock::Deferred::Poll { .. } => self.poll_monitors(out),
+            }
+        }
+    }
+
+    /// Delivers a queued message to its module's handler, if it is still due: the module is
+    /// there (else what waits for it is held), and a task is still the one to run.
+    fn release_delivery(&mut self, module: ModuleName, envelope: Envelope, out: &mut Vec<Action>) {
+        if envelope.class.is_task() {
+            let due = self.tasks.get(&envelope.id).is_some_and(|t| {
+                t.running
+                    && t.handler == module
+                    && Some(tca_messages::NodeId(t.node)) == envelope.node
+            });
+            if !due {
+                tracing::debug!(id = %envelope.id, "a queued delivery of a task that stopped meanwhile; dropped");
+                return;
+            }
+        }
+        let Some(link) = self.modules.get(&module).and_then(|m| m.link) else {
+            self.hand_back(&module, envelope);
+            return;
+        };
+        self.clock.releasing = true;
+        self.send(link, &envelope, out);
+        self.clock.releasing = false;
+    }
+
+    /// A queued message for a module that went away waits for it like any message for a module
+    /// that is down (queries and tasks are failed or requeued by the module's departure).
+    pub(super) fn hand_back(&mut self, module: &ModuleName, envelope: Envelope) {
+        if matches!(envelope.class, Class::Inform)
+            && let Err(e) = self.hold(module, Waiting::new(envelope, self.now))
+        {
+            tracing::debug!(%module, error = %e, "an inform for a module that went away was dropped");
         }
     }
 
@@ -339,6 +463,7 @@ impl Central {
             context: None,
             node: None,
             correlation,
+            cause: None,
             // On the clock of the message being handled, so central's answers never move a
             // module's (possibly simulated) clock.
             timestamp_ns: self.cause_stamp,
@@ -348,8 +473,37 @@ impl Central {
         }
     }
 
-    /// Encodes and sends an envelope on a link, logging it.
+    /// Encodes and sends an envelope on a link, logging it. On the simulated clock, a message
+    /// for a simulated module's handler waits in the queue for its turn instead.
     fn send(&mut self, link: LinkId, envelope: &Envelope, out: &mut Vec<Action>) {
+        let target = self.links.get(&link).and_then(|l| l.module.clone());
+        let followed = self.clock.on
+            && envelope.class.is_handled()
+            && target
+                .as_ref()
+                .and_then(|m| self.modules.get(m))
+                .is_some_and(|m| m.hello.simulated_time);
+        if followed && !self.clock.releasing {
+            let mut deferred = envelope.clone();
+            deferred.timestamp_ns = self.clock.release_stamp(deferred.timestamp_ns);
+            let Some(module) = target else { return };
+            self.clock.push(
+                deferred.timestamp_ns,
+                clock::Deferred::Deliver {
+                    module,
+                    envelope: deferred,
+                },
+            );
+            return;
+        }
+        if self.clock.on
+            && let Some(module) = &target
+        {
+            self.clock.delivered(envelope, module);
+            if followed {
+                self.clock.started(envelope, module);
+            }
+        }
         match encode(envelope) {
             Ok(frame) => {
                 let frame = Bytes::from(frame);
@@ -456,6 +610,18 @@ impl Central {
         out: &mut Vec<Action>,
     ) {
         tracing::warn!(?link, ?module, %error, "bad input");
+        self.record_problem(link, module, error, frame, out);
+    }
+
+    /// Logs a problem (a `Problem` record in the traffic log) without printing it.
+    fn record_problem(
+        &mut self,
+        link: Option<LinkId>,
+        module: Option<ModuleName>,
+        error: String,
+        frame: &[u8],
+        out: &mut Vec<Action>,
+    ) {
         out.push(Action::Log(LogRecord {
             at_ns: self.now,
             kind: RecordKind::Problem(ProblemRecord {

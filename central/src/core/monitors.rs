@@ -9,7 +9,7 @@ use tca_messages::control::{Monitor, MonitorAction};
 use tca_messages::{Class, DataFormat, Envelope, MessageId, ModuleName, SendOptions, decode_data};
 
 use super::routing::OpenQuery;
-use super::{Action, Central};
+use super::{Action, Central, clock};
 
 /// A live monitor.
 #[derive(Clone, Debug)]
@@ -73,9 +73,23 @@ impl Central {
         Ok(())
     }
 
+    /// Sets when monitor `i` checks next; on the simulated clock that is an event.
+    fn schedule_poll(&mut self, i: usize, at: Option<u64>) {
+        let Some(m) = self.monitors.get_mut(i) else {
+            return;
+        };
+        m.next_poll = at;
+        if self.clock.on
+            && let Some(t) = at
+        {
+            let node = m.spec.node.0;
+            self.clock.push(t, clock::Deferred::Poll { node });
+        }
+    }
+
     /// A node's handler started: its monitors check their condition now.
     pub(super) fn monitors_node_started(&mut self, node: u64, out: &mut Vec<Action>) {
-        let now = self.now;
+        let now = self.tree_now();
         let due: Vec<usize> = self
             .monitors
             .iter()
@@ -95,10 +109,14 @@ impl Central {
     /// A node ended: its monitors end with it.
     pub(super) fn monitors_node_ended(&mut self, node: u64) {
         self.monitors.retain(|m| m.spec.node.0 != node);
+        self.clock.drop_polls(node);
     }
 
-    /// When the next poll is due.
+    /// When the next poll is due on the wall clock (on the simulated clock polls are events).
     pub(super) fn next_poll(&self) -> Option<u64> {
+        if self.clock.on {
+            return None;
+        }
         self.monitors
             .iter()
             .filter(|m| m.in_flight.is_none())
@@ -108,7 +126,7 @@ impl Central {
 
     /// Sends the condition queries that are due.
     pub(super) fn poll_monitors(&mut self, out: &mut Vec<Action>) {
-        let now = self.now;
+        let now = self.tree_now();
         for i in 0..self.monitors.len() {
             let due = self
                 .monitors
@@ -123,7 +141,7 @@ impl Central {
             };
             let Some(link) = self.modules.get(&handler).and_then(|m| m.link) else {
                 // The condition's module is down: try again a period later.
-                self.monitors[i].next_poll = spec.period_ms.map(|p| now + p * 1_000_000);
+                self.schedule_poll(i, spec.period_ms.map(|p| now + p * 1_000_000));
                 continue;
             };
             let mut query = self.central_envelope(
@@ -174,7 +192,7 @@ impl Central {
                 self.trigger(spec, out);
             }
             Ok(false) => match spec.period_ms {
-                Some(p) => self.monitors[i].next_poll = Some(self.now + p * 1_000_000),
+                Some(p) => self.schedule_poll(i, Some(self.tree_now() + p * 1_000_000)),
                 None => {
                     self.monitors.remove(i);
                 }
@@ -185,7 +203,8 @@ impl Central {
                     spec.node, spec.query
                 );
                 self.problem(None, None, reason, &[], out);
-                self.monitors[i].next_poll = spec.period_ms.map(|p| self.now + p * 1_000_000);
+                let next = spec.period_ms.map(|p| self.tree_now() + p * 1_000_000);
+                self.schedule_poll(i, next);
             }
         }
     }

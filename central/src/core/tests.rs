@@ -78,6 +78,7 @@ impl Harness {
             context: None,
             node: None,
             correlation: None,
+            cause: None,
             timestamp_ns: self.now,
             options: SendOptions::default(),
             redelivery: 0,
@@ -96,6 +97,7 @@ impl Harness {
             capacity,
             pid: 1,
             host: "test".into(),
+            simulated_time: false,
         };
         let mut env = self.envelope(
             link,
@@ -728,6 +730,7 @@ fn the_policy_refuses_strangers_and_sends_outside_the_rules_without_routing_them
                 capacity: 1,
                 pid: 1,
                 host: "test".into(),
+                simulated_time: false,
             },
             credentials: control::Credentials {
                 identity: id.into(),
@@ -800,4 +803,26 @@ fn the_policy_refuses_strangers_and_sends_outside_the_rules_without_routing_them
         RouteError::NotPermitted { .. }
     ));
     assert_eq!(h.central.counters().not_permitted, 3);
+}
+
+#[test]
+fn a_task_sent_from_a_killed_task_is_not_started() {
+    let mut h = Harness::new();
+    h.connect(1, "user", 1);
+    h.connect(2, "lrp", 4);
+    h.connect(3, "ctl", 1);
+    h.register::<Target>(2, "lrp", "step", Class::Goal, false);
+    h.register::<Target>(3, "ctl", "moveArm", Class::Command, false);
+    let (_step, sent) = task(&mut h, 1, "user", Class::Goal, "step", None, false);
+    let s = sent[0].1.node.unwrap();
+    control_msg(&mut h, 1, "user", names::KILL, &control::Kill { node: s });
+    // The step's handler, not yet told it was killed, still sends its leg move.
+    let (_leg, sent) = task(&mut h, 2, "lrp", Class::Command, "moveArm", Some(s), false);
+    assert!(
+        sent.iter().all(|(link, _)| *link != 3),
+        "the controller got {sent:?}"
+    );
+    let err = error_of(&sent.iter().find(|(l, _)| *l == 2).expect("lrp told").1);
+    assert!(err.to_string().contains("no longer live"), "{err}");
+    assert_eq!(h.central.live_nodes(), 0);
 }

@@ -72,6 +72,7 @@ impl Central {
                     capacity: 1,
                     pid: 0,
                     host: String::new(),
+                    simulated_time: false,
                 },
                 capacity: 1,
                 running: 0,

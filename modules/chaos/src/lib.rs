@@ -108,10 +108,12 @@ pub struct ChaosReport {
     pub kills: Vec<KillRecord>,
     /// The log's audit.
     pub audit: Audit,
+    /// The log's time check.
+    pub time: tca_logs::TimeCheck,
     /// The log.
     pub log: PathBuf,
-    /// Every walk reached its goal with no collision, the kills were made and the audit is
-    /// clean.
+    /// Every walk reached its goal with no collision, the kills were made, the audit is clean
+    /// and time was kept.
     pub passed: bool,
     /// Wall-clock seconds of the whole run.
     pub wall_time_s: f64,
@@ -147,7 +149,10 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
     let central = tca_central::start(StartOptions {
         log: Some(log.clone()),
         listen: vec![endpoint.clone()],
-        ..StartOptions::default()
+        config: tca_central::CentralConfig {
+            simulated_time: true,
+            ..tca_central::CentralConfig::default()
+        },
     })
     .await
     .context("cannot start central")?;
@@ -202,17 +207,19 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
     }
     watcher.close().await;
     central.shutdown().await.context("central did not stop")?;
-    let audit = tca_logs::audit(
-        &tca_logs::LogFile::open(&log)
-            .with_context(|| format!("cannot read the log {}", log.display()))?,
-    );
+    let recorded = tca_logs::LogFile::open(&log)
+        .with_context(|| format!("cannot read the log {}", log.display()))?;
+    let audit = tca_logs::audit(&recorded);
+    let time = tca_logs::time_check(&recorded);
     let passed = walks.iter().all(|w| w.reached && w.collisions == 0)
         && kills.len() >= options.kills
-        && audit.is_clean();
+        && audit.is_clean()
+        && time.holds();
     Ok(ChaosReport {
         walks,
         kills,
         audit,
+        time,
         log,
         passed,
         wall_time_s: started.elapsed().as_secs_f64(),
@@ -283,6 +290,7 @@ async fn one_walk(
         step_pictures: false,
         connect: Some(endpoint.to_owned()),
         compute: options.compute,
+        fault: None,
     };
     let (tx, mut rx) = mpsc::unbounded_channel();
     let mut walk = tokio::spawn(async move { tca_walk::walk(&walk_options, tx).await });
@@ -405,6 +413,7 @@ pub fn summary(report: &ChaosReport) -> String {
         report.wall_time_s
     );
     s.push_str(&report.audit.text());
+    s.push_str(&report.time.text());
     s.push_str(&format!(
         "log: {}\n{}\n",
         report.log.display(),

@@ -187,6 +187,7 @@ impl ModuleBuilder {
             capacity: self.capacity,
             pid: std::process::id(),
             host: hostname(),
+            simulated_time: self.sim_time,
         };
         let credentials = self.credentials.or_else(credentials_from_env);
         let hello = hello_request(hello, credentials);
@@ -247,6 +248,7 @@ impl ModuleBuilder {
                 requery_after_crash: self.requery_after_crash,
                 max_frame_bytes: self.max_frame_bytes,
                 sim_time: self.sim_time,
+                central_clock: welcome.simulated_clock,
             },
             link.sender,
             link.keep,

@@ -154,6 +154,7 @@ impl Rejoiner {
                     }
                 };
                 module.set_link(welcome.link);
+                module.set_central_clock(welcome.simulated_clock);
                 let id = module.next_id();
                 match self.send(module, &self.greeting.register, id) {
                     Ok(()) => {
@@ -230,6 +231,7 @@ pub(crate) fn bootstrap(
         context: None,
         node: None,
         correlation: None,
+        cause: None,
         timestamp_ns: now_ns(),
         options: SendOptions::default(),
         redelivery: 0,

@@ -63,6 +63,8 @@ pub struct CommandFailure {
 /// ends.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CommandRun {
+    /// When it started.
+    pub started: Instant,
     /// Wall-clock time the move plays out over.
     pub wall: Duration,
     /// Simulated time the move took.
@@ -148,6 +150,18 @@ impl Controller {
         self.collisions = saved.collisions;
         self.idle = Duration::from_nanos(saved.idle_ns);
         self.motion = None;
+        self.idle_since = now;
+    }
+
+    /// Puts the Controller on a time base: instants of `now`'s kind, moves playing out at
+    /// `speed`. Switching base (a Controller that joins a central keeping simulated time, or
+    /// leaves one) settles what was moving and starts idle from `now`.
+    pub fn set_timeline(&mut self, speed: SpeedFactor, now: Instant) {
+        if speed == self.speed {
+            return;
+        }
+        self.motion = None;
+        self.speed = speed;
         self.idle_since = now;
     }
 
@@ -293,6 +307,7 @@ impl Controller {
             });
         self.idle_since = now;
         CommandRun {
+            started: now,
             wall: Duration::ZERO,
             simulated: Duration::ZERO,
             outcome,
@@ -338,6 +353,7 @@ impl Controller {
         path: Option<MotionPath>,
         result: crate::sim::Result<()>,
     ) -> CommandRun {
+        let motion_started = motion.started;
         let simulated = self.sim.clock().saturating_sub(motion.clock_before);
         let wall = self.speed.wall_time(simulated);
         motion.collides = matches!(result, Err(SimError::Collision { .. }));
@@ -361,6 +377,7 @@ impl Controller {
             _ => self.idle_since = motion.started,
         }
         CommandRun {
+            started: motion_started,
             wall,
             simulated,
             outcome,

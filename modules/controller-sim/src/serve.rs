@@ -7,6 +7,7 @@
 //! wall-clock time, then raise the failure's exception in their own context and end.
 
 use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::Duration;
 
 use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
 use tca_single_leg_messages::{
@@ -15,7 +16,7 @@ use tca_single_leg_messages::{
 };
 use tokio::time::Instant;
 
-use crate::config::ControllerConfig;
+use crate::config::{ControllerConfig, SpeedFactor};
 use crate::controller::{CommandFailure, CommandRun, Controller, Snapshot};
 use crate::convert::{
     Raised, body_pose_to_message, carriage_point_to_message, force_to_message, joints_from_message,
@@ -39,13 +40,18 @@ pub async fn connect(
     connector: &Connector,
     config: ControllerConfig,
 ) -> Result<Module, ModuleError> {
-    let mut controller = Controller::new(&config, Instant::now())
+    // On central's simulated clock the Controller's own clock is the bus's: a message's
+    // simulated stamp maps onto an instant after `epoch`, and moves play out in it at the
+    // rate of one simulated second a second, whatever the wall-clock pace (`config.speed`).
+    // Otherwise moves play out in wall-clock time at that pace (see `Shared::now`).
+    let epoch = Instant::now();
+    let mut controller = Controller::new(&config, epoch)
         .map_err(|e| ModuleError::Config(format!("controller configuration: {e}")))?;
     let persistence = match &config.state_file {
         Some(path) => {
             let (persistence, saved) = Persistence::open(path).map_err(state_error)?;
             if let Some(saved) = saved {
-                controller.restore(&saved, Instant::now());
+                controller.restore(&saved, epoch);
                 tracing::info!(file = %path.display(), carriage_y_m = saved.sim.carriage.y_m, "controller state restored: the leg is where the last controller left it");
             } else {
                 persistence.write(controller.saved()).map_err(state_error)?;
@@ -63,6 +69,8 @@ pub async fn connect(
         state: Arc::new(Mutex::new(controller)),
         turn: Arc::new(tokio::sync::Mutex::new(())),
         persistence,
+        epoch,
+        pace: config.speed,
     };
     let builder = Module::builder(config.module_name.clone())
         .replace(config.replace)
@@ -103,40 +111,40 @@ pub async fn connect(
         .handle({
             let s = s.clone();
             move |_ctx, _q: BodyPosition| {
-                let snap = s.snapshot();
+                let snap = s.snapshot(&_ctx);
                 async move { Ok(body_pose_to_message(&snap.carriage)) }
             }
         })
         .handle({
             let s = s.clone();
             move |_ctx, _q: JointLegPosition| {
-                let snap = s.snapshot();
+                let snap = s.snapshot(&_ctx);
                 async move { Ok(joints_to_message(&snap.joints)) }
             }
         })
         .handle({
             let s = s.clone();
             move |_ctx, _q: CartLegPosition| {
-                let snap = s.snapshot();
+                let snap = s.snapshot(&_ctx);
                 async move { Ok(carriage_point_to_message(&snap.cart_leg)) }
             }
         })
         .handle({
             let s = s.clone();
             move |_ctx, _q: GlobalLegPosition| {
-                let snap = s.snapshot();
+                let snap = s.snapshot(&_ctx);
                 async move { Ok(world_point_to_message(&snap.global_leg)) }
             }
         })
         .handle({
             let s = s.clone();
             move |_ctx, _q: ReadForce| {
-                let snap = s.snapshot();
+                let snap = s.snapshot(&_ctx);
                 async move { Ok(force_to_message(&snap.force)) }
             }
         })
         .handle(move |_ctx, _q: ControllerStatus| {
-            let snap = s.snapshot();
+            let snap = s.snapshot(&_ctx);
             async move {
                 Ok(ControllerState {
                     clock_s: snap.clock.as_secs_f64(),
@@ -177,6 +185,10 @@ struct Shared {
     turn: Arc<tokio::sync::Mutex<()>>,
     /// The state file, when the Controller keeps one.
     persistence: Option<Arc<Mutex<Persistence>>>,
+    /// On central's simulated clock: the instant simulated time 0 maps onto.
+    epoch: Instant,
+    /// How fast moves play out against the wall clock.
+    pace: SpeedFactor,
 }
 
 impl Shared {
@@ -186,8 +198,32 @@ impl Shared {
         self.state.lock().unwrap_or_else(|p| p.into_inner())
     }
 
-    fn snapshot(&self) -> Snapshot {
-        self.lock().snapshot(Instant::now())
+    /// The instant a handler acts at, and the pace moves play out at. On central's simulated
+    /// clock: the handler's simulated time, one simulated second a second (so a query is
+    /// answered with the leg as it is then, part-way through a move). Otherwise: now, at the
+    /// configured pace.
+    fn now(&self, ctx: &Context) -> (Instant, SpeedFactor) {
+        if ctx.on_central_clock() {
+            (
+                self.epoch + Duration::from_nanos(ctx.time_ns()),
+                SpeedFactor::Times(1.0),
+            )
+        } else {
+            (Instant::now(), self.pace)
+        }
+    }
+
+    /// The state as of the handler's time (the Controller put on that handler's time base).
+    fn at(&self, ctx: &Context) -> (MutexGuard<'_, Controller>, Instant) {
+        let (now, timeline) = self.now(ctx);
+        let mut state = self.lock();
+        state.set_timeline(timeline, now);
+        (state, now)
+    }
+
+    fn snapshot(&self, ctx: &Context) -> Snapshot {
+        let (state, now) = self.at(ctx);
+        state.snapshot(now)
     }
 
     /// Runs a command: simulate, wait its wall-clock time, then raise and end.
@@ -203,9 +239,10 @@ impl Shared {
             tracing::info!(id = %ctx.message_id(), "redelivered command was carried out before; answering with its outcome");
             return self.end(ctx, outcome);
         }
+        let on_clock = ctx.on_central_clock();
         let run = {
-            let mut state = self.lock();
-            let run = start(&mut state, Instant::now());
+            let (mut state, started) = self.at(ctx);
+            let run = start(&mut state, started);
             if let Some(p) = &self.persistence {
                 let mut p = p.lock().unwrap_or_else(|e| e.into_inner());
                 if let Err(e) = p.record(ctx.message_id(), &run.outcome, state.saved()) {
@@ -220,10 +257,22 @@ impl Shared {
             ok = run.outcome.is_ok(),
             "controller command"
         );
-        if !run.wall.is_zero() {
-            tokio::time::sleep(run.wall).await;
+        // The move plays out: in wall-clock time, or (on central's simulated clock) at its
+        // pace while its end is stamped its simulated duration later.
+        let wait = if on_clock {
+            self.pace.wall_time(run.simulated)
+        } else {
+            run.wall
+        };
+        if !wait.is_zero() {
+            tokio::time::sleep(wait).await;
         }
-        self.lock().settle(Instant::now());
+        let ended = if on_clock {
+            run.started + run.simulated
+        } else {
+            Instant::now()
+        };
+        self.lock().settle(ended);
         // On the bus's simulated time (if the module uses it) the move took this long.
         ctx.spend(run.simulated);
         self.end(ctx, run.outcome)

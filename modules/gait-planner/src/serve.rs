@@ -104,7 +104,7 @@ pub async fn connect(connector: &Connector, config: GaitConfig) -> Result<Module
             let shared = shared.clone();
             async move { shared.plan_step(&ctx, step).await }
         });
-    crate::walk::register(builder, walks, config.max_replans)
+    crate::walk::register(builder, walks, config.max_replans, config.leg.rails)
         .connect(connector)
         .await
 }
@@ -207,11 +207,14 @@ impl Shared {
             y_m: plan.footfall.y,
             z_m: plan.footfall.z,
         };
-        // The leg move. Planned ahead, it waits for the previous body move: the leg's
-        // trajectory starts from where that move leaves it.
+        // The leg move. Planned ahead (concurrent walking, §3.3), the Leg Recovery Planner
+        // plans it now, from where the previous step will leave the foot, and only the move
+        // itself waits for the previous body move (sequential achievement: the goal may be
+        // planned meanwhile, its leg move may not start).
         let leg_constraints = step.after_body_move.map(|previous| {
-            ConstraintSpec::delay_planning(TaskRef::Message(previous), TaskRef::This)
+            ConstraintSpec::sequential_achievement(TaskRef::Message(previous), TaskRef::This)
         });
+        let start_foot = step.start.map(|s| s.foot);
         let elbow = Some(match plan.elbow {
             tca_robot::ElbowBranch::Positive => ElbowSide::Positive,
             tca_robot::ElbowBranch::Negative => ElbowSide::Negative,
@@ -221,6 +224,7 @@ impl Shared {
                 footfall,
                 body_y_m,
                 elbow,
+                start_foot,
             },
             leg_constraints,
         )?;

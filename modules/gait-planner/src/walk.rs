@@ -5,9 +5,9 @@
 //!
 //! - **sequential**: step k+1 is planned only after step k's body move is achieved
 //!   (`delay_planning(bodyMove k, planStep k+1)`);
-//! - **concurrent**: step k+1 is planned at once, from where step k will leave the carriage
-//!   and the foot, while step k executes; its leg move waits for step k's body move
-//!   (`delay_planning(bodyMove k, recoverLeg k+1)`).
+//! - **concurrent**: step k+1 is planned while step k executes, from where step k will leave
+//!   the carriage and the foot; its planning waits for step k-1's body move (what the scanner
+//!   sees from where the carriage stands), and its leg move for step k's body move.
 //!
 //! In both, each leg move is achieved before its body move starts.
 //!
@@ -22,6 +22,7 @@ use std::sync::{Arc, Mutex};
 
 use tca_messages::{MessageId, NodeId};
 use tca_module::{ConstraintSpec, Context, HandlerError, ModuleBuilder, Task, TaskRef};
+use tca_robot::RailParams;
 use tca_single_leg_messages::{
     HardwareFault, MoveFailed, PlanStep, StepStart, Walk, WalkMode, WorldPoint,
 };
@@ -75,19 +76,24 @@ impl Walks {
 }
 
 /// Registers the `walk` goal and the exception handlers on a Gait Planner module builder.
-pub fn register(builder: ModuleBuilder, walks: Walks, max_replans: u32) -> ModuleBuilder {
+pub fn register(
+    builder: ModuleBuilder,
+    walks: Walks,
+    max_replans: u32,
+    rails: RailParams,
+) -> ModuleBuilder {
     let (w1, w2) = (walks.clone(), walks);
     builder
         .handle(move |ctx: Context, walk: Walk| {
             let walks = w1.clone();
-            async move { start_walk(&ctx, walk, &walks).await }
+            async move { start_walk(&ctx, walk, &walks, &rails).await }
         })
         .handle(move |ctx: Context, failure: MoveFailed| {
             let walks = w2.clone();
             async move { replan(&ctx, failure, &walks, max_replans).await }
         })
         .handle(|_ctx: Context, fault: HardwareFault| async move {
-            tracing::error!(detail = %fault.detail, "hardware fault: halting the walk");
+            tracing::info!(detail = %fault.detail, "hardware fault: halting the walk");
             // Passed up: nobody above handles it, so central kills the whole tree and tells
             // the user why.
             Err::<(), _>(HandlerError::new(format!(
@@ -97,10 +103,13 @@ pub fn register(builder: ModuleBuilder, walks: Walks, max_replans: u32) -> Modul
         })
 }
 
-async fn start_walk(ctx: &Context, walk: Walk, walks: &Walks) -> Result<(), HandlerError> {
-    if !walk.goal_y_m.is_finite() {
-        return Err(HandlerError::new("the walk's goal is not a finite number"));
-    }
+async fn start_walk(
+    ctx: &Context,
+    walk: Walk,
+    walks: &Walks,
+    rails: &RailParams,
+) -> Result<(), HandlerError> {
+    check_goal(walk.goal_y_m, rails).map_err(HandlerError::new)?;
     let node = ctx
         .node()
         .ok_or_else(|| HandlerError::new("a walk must be a task (sent as a goal)"))?;
@@ -128,6 +137,26 @@ async fn start_walk(ctx: &Context, walk: Walk, walks: &Walks) -> Result<(), Hand
     Ok(())
 }
 
+/// Whether the carriage can stand at `goal_y_m` on `rails`; if not, says why and what goal to
+/// give instead.
+pub fn check_goal(goal_y_m: f64, rails: &RailParams) -> Result<(), String> {
+    if !goal_y_m.is_finite() {
+        return Err(format!(
+            "the walk's goal {goal_y_m} is not a number of metres; give a carriage position \
+             between {:.2} and {:.2} m",
+            rails.y_min_m, rails.y_max_m
+        ));
+    }
+    if goal_y_m < rails.y_min_m || goal_y_m > rails.y_max_m {
+        return Err(format!(
+            "the goal y = {goal_y_m:.3} m is off the rails, which run from {:.2} to {:.2} m; \
+             give a goal between them",
+            rails.y_min_m, rails.y_max_m
+        ));
+    }
+    Ok(())
+}
+
 /// The step after `step`, which plans to leave the carriage at `body_target_y_m` and the foot
 /// at `footfall` with its body move `body_move`.
 pub fn next_step(
@@ -150,10 +179,19 @@ pub fn next_step(
 }
 
 /// The constraints the next step is sent with: sequentially, it is not planned before this
-/// step's body move is achieved.
+/// step's body move is achieved; concurrently (§3.3), it is planned while this step executes,
+/// but not before the previous step's body move is achieved (one step of look-ahead: what
+/// the scanner sees from where the carriage stands).
 pub fn next_step_constraints(step: &PlanStep, body_move: &Task) -> Option<ConstraintSpec> {
-    (step.mode == WalkMode::Sequential)
-        .then(|| ConstraintSpec::delay_planning(body_move.task_ref(), TaskRef::This))
+    match step.mode {
+        WalkMode::Sequential => Some(ConstraintSpec::delay_planning(
+            body_move.task_ref(),
+            TaskRef::This,
+        )),
+        WalkMode::Concurrent => step.after_body_move.map(|previous| {
+            ConstraintSpec::delay_planning(TaskRef::Message(previous), TaskRef::This)
+        }),
+    }
 }
 
 /// `moveFailed` at the walk node: plan again from where the leg is.
@@ -179,7 +217,7 @@ async fn replan(
         state.first_live_step = state.steps_sent;
         (state.clone(), std::mem::take(&mut state.live_steps))
     };
-    tracing::warn!(
+    tracing::info!(
         command = %failure.command,
         kind = ?failure.kind,
         detail = %failure.detail,
@@ -192,7 +230,9 @@ async fn replan(
             state.replans, failure.command, failure.kind, failure.detail
         )));
     }
-    // Patch first (a new step under the walk), then kill the steps in progress.
+    // Patch first (a new step under the walk), then kill the steps in progress, newest
+    // first: killing a step releases what waits on its body move, so a step planned ahead
+    // from where the failed one would have left the leg must be gone before that.
     ctx.goal(&PlanStep {
         step: state.steps_sent,
         goal_y_m: state.goal_y_m,
@@ -200,10 +240,27 @@ async fn replan(
         start: None,
         after_body_move: None,
     })?;
-    for step in old_steps {
+    for step in old_steps.into_iter().rev() {
         if let Err(e) = ctx.kill(step).await {
             tracing::debug!(%step, %e, "step already finished");
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn goals_off_the_rails_or_not_numbers_are_refused_with_the_range() {
+        let rails = tca_robot::LegParams::default().rails;
+        for ok in [rails.y_min_m, 5.0, rails.y_max_m] {
+            assert!(check_goal(ok, &rails).is_ok(), "{ok}");
+        }
+        for bad in [100.0, 0.2, -1.0, f64::NAN, f64::INFINITY] {
+            let e = check_goal(bad, &rails).unwrap_err();
+            assert!(e.contains("0.50") && e.contains("10.50"), "{bad}: {e}");
+        }
+    }
 }

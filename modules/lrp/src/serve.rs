@@ -168,7 +168,7 @@ impl Shared {
                 "recoverLeg planned for another carriage position than the current one"
             );
         }
-        let (map, start) = self.inputs(ctx, goal.body_y_m, None).await?;
+        let (map, start) = self.inputs(ctx, goal.body_y_m, goal.start_foot).await?;
         let footfall = Point3::new(goal.footfall.x_m, goal.footfall.y_m, goal.footfall.z_m);
         let began = Instant::now();
         let planner = self.planner.clone();

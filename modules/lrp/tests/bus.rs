@@ -174,6 +174,7 @@ async fn recover_leg_moves_the_foot_around_the_sun_box() {
                 },
                 body_y_m: 2.0,
                 elbow: None,
+                start_foot: None,
             },
             [],
         )
@@ -287,6 +288,7 @@ async fn a_blocked_footfall_raises_move_failed_and_moves_nothing() {
             },
             body_y_m: 2.0,
             elbow: None,
+            start_foot: None,
         }))
         .unwrap();
     let failure = within("moveFailed", failures.recv()).await.unwrap();

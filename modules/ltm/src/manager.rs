@@ -42,8 +42,8 @@ pub struct LtmConfig {
     /// Stamp the module's messages with simulated time, charging each query what
     /// `compute_time` says for its map building and answering.
     pub simulated_time: bool,
-    /// What a `mapRegion` charges to simulated time: what it measured, or a model per image
-    /// cell merged and map cell computed (`ComputeTime::PerUnit`).
+    /// What a `mapRegion` charges to simulated time: what it measured, or a model per map cell
+    /// computed, an image cell merged counting a quarter (`ComputeTime::PerUnit`).
     pub compute_time: ComputeTime,
 }
 

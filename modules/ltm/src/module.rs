@@ -70,7 +70,8 @@ async fn map_region(
         )
     };
     let mut computing = std::time::Duration::ZERO;
-    // Work done, for a modelled charge: image cells merged and map cells computed.
+    // Work done, for a modelled charge: map cells computed, and image cells merged at a
+    // quarter of a map cell each.
     let mut work = 0u64;
     if needs_image {
         let image = ctx.query(&AcquireImage { sensor }).await?;
@@ -89,7 +90,9 @@ async fn map_region(
         .await
         .map_err(|e| HandlerError::new(format!("map building did not finish: {e}")))??;
         computing += began.elapsed();
-        work += (report.known + report.occluded) as u64;
+        // Merging an image costs a quarter of computing a map cell, per cell (the modelled
+        // charge of `ComputeTime::PerUnit` counts map cells computed).
+        work += (report.known + report.occluded) as u64 / 4;
         tracing::debug!(
             changed = report.cells_changed,
             "new image merged for a query"
@@ -107,6 +110,14 @@ async fn map_region(
     .map_err(|e| HandlerError::new(format!("the query did not finish: {e}")))??;
     computing += began.elapsed();
     work += computed;
-    ctx.spend(compute_time.charged_for(computing, work));
+    let charged = compute_time.charged_for(computing, work);
+    tracing::debug!(
+        image = needs_image,
+        cells = work,
+        measured_ms = computing.as_secs_f64() * 1e3,
+        charged_s = charged.as_secs_f64(),
+        "mapRegion answered"
+    );
+    ctx.spend(charged);
     answer
 }

@@ -60,5 +60,5 @@ pub use grid::{CellIndex, Grid, GridError};
 pub use kinematics::{
     AxisLimits, ElbowBranch, Joint, JointPosition, KinematicsError, LegKinematics,
 };
-pub use params::{LegParams, ParamsError, ScannerMount};
+pub use params::{LegParams, ParamsError, RailParams, ScannerMount};
 pub use terrain::{HeightField, RayHit, TerrainError};

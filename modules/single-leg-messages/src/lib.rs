@@ -420,6 +420,9 @@ pub struct RecoverLeg {
     /// The way the elbow must bend at the footfall (the body move that follows keeps it, so
     /// its reach depends on it); `None`: either.
     pub elbow: Option<ElbowSide>,
+    /// Where the foot will stand when the move starts, world frame, when it is planned ahead
+    /// (while the previous step still executes); `None`: where the foot is now.
+    pub start_foot: Option<WorldPoint>,
 }
 
 /// The way the leg's elbow bends: the sign of the elbow angle (the two inverse-kinematics

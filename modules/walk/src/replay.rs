@@ -15,9 +15,9 @@
 //! live 1.65`. Modules run live that need the terrain (the Controller, the ISM) need the
 //! recorded terrain and seed.
 //!
-//! Replays are exact for sequential walks. Concurrent walks can diverge by themselves: when
-//! two `mapRegion` refreshes overlap in the LTM Manager, which merged image a query sees
-//! depends on thread timing.
+//! Replays are exact, concurrent walks included: the recorded walk ran on central's simulated
+//! clock, which releases every message in simulated-time order one at a time, and the replay's
+//! central keeps the same clock, so the live modules see the same inputs at the same times.
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::Context as _;
 use tca_logs::{Direction, LogFile, RecordKind, TimeBase};
-use tca_messages::{Class, decode_data};
+use tca_messages::{Class, Message, decode_data};
 use tca_module::Module;
 use tca_robot::{CarriagePose, LegKinematics, LegParams};
 use tca_single_leg_messages::{
@@ -150,6 +150,7 @@ pub fn from_log(report: &mut WalkReport, log_path: &Path, out: &Path) -> anyhow:
             .sum();
         report.planning_ms_per_step = Some(planning_s * 1e3 / report.steps as f64);
     }
+    report.step_ends_s = body_move_ends_s(&log);
     let timeline = out.join("timeline.png");
     tca_timeline::write_png(&sim, &timeline)?;
     report.outputs.push(timeline);
@@ -160,6 +161,33 @@ pub fn from_log(report: &mut WalkReport, log_path: &Path, out: &Path) -> anyhow:
     report.outputs.push(out.join("timeline.txt"));
     report.outputs.push(log_path.to_owned());
     Ok(())
+}
+
+/// When each body move ended, simulated seconds: the stamps of the Controller's successes of
+/// `bodyMove`.
+fn body_move_ends_s(log: &LogFile) -> Vec<f64> {
+    let mut moves = std::collections::HashSet::new();
+    let mut ends = Vec::new();
+    for record in &log.records {
+        let RecordKind::Frame(f) = &record.kind else {
+            continue;
+        };
+        let Ok(env) = LogFile::envelope(f) else {
+            continue;
+        };
+        match (f.direction, env.class) {
+            (Direction::Out, Class::Command) if env.name.as_str() == BodyMove::NAME => {
+                moves.insert(env.id);
+            }
+            (Direction::In, Class::Success)
+                if env.correlation.is_some_and(|c| moves.remove(&c)) =>
+            {
+                ends.push(env.timestamp_ns as f64 / 1e9);
+            }
+            _ => {}
+        }
+    }
+    ends
 }
 
 /// The human summary.
@@ -202,6 +230,19 @@ pub fn summary(report: &WalkReport) -> String {
     );
     if let (Some(m), Some(per)) = (report.messages, report.messages_per_step) {
         let _ = writeln!(s, "  {m} messages ({per:.1} per step)");
+    }
+    if !report.step_ends_s.is_empty() {
+        let mut at = 0.0;
+        let took: Vec<String> = report
+            .step_ends_s
+            .iter()
+            .map(|&end| {
+                let t = format!("{:.0}", end - at);
+                at = end;
+                t
+            })
+            .collect();
+        let _ = writeln!(s, "  steps took {} simulated s", took.join(", "));
     }
     if let Some(p) = report.planning_ms_per_step {
         let _ = writeln!(

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
+use tca_controller_sim::sim::FaultConfig;
 use tca_controller_sim::{ControllerConfig, SpeedFactor};
 use tca_gait_planner::GaitConfig;
 use tca_ism::IsmConfig;
@@ -40,6 +41,8 @@ pub struct SystemSetup {
     pub state_dir: Option<PathBuf>,
     /// Run the Gait Planner with these parameters instead of the shipped ones.
     pub gait_params: Option<tca_gait_planner::GaitParams>,
+    /// Faults the simulated Controller injects.
+    pub faults: FaultConfig,
 }
 
 /// What the planners charge to simulated time for their computing.
@@ -68,9 +71,13 @@ impl ComputeModel {
     pub const PAPER_REACHABILITY_S: u64 = 1;
     /// What the LTM Manager charges under [`ComputeModel::Paper`] for any `mapRegion`, ms.
     pub const PAPER_LTM_BASE_MS: u64 = 500;
-    /// What the LTM Manager charges under [`ComputeModel::Paper`] per image cell merged and
-    /// per map cell computed (a cached cell costs nothing), µs.
-    pub const PAPER_LTM_PER_CELL_US: u64 = 20;
+    /// What the LTM Manager charges under [`ComputeModel::Paper`] per map cell computed (a
+    /// cached cell costs nothing), µs; an image cell merged costs a quarter of that. Fitted to
+    /// the report's Figure 18 (the 1990 LTM Manager's map computing was most of a step's
+    /// planning time: the first map, from scratch, most of the first step's minute; later
+    /// maps reuse the cache): on course 3 it charges about 45 s for the first step and 25 to
+    /// 30 s for each later one (BENCHMARKS.md).
+    pub const PAPER_LTM_PER_CELL_US: u64 = 2000;
     /// Simulated seconds the PDM charges per picture under [`ComputeModel::Paper`].
     pub const PAPER_PDM_S: u64 = 1;
 
@@ -126,6 +133,7 @@ impl SystemSetup {
             compute: ComputeModel::default(),
             state_dir: None,
             gait_params: None,
+            faults: FaultConfig::none(),
         })
     }
 
@@ -153,8 +161,9 @@ pub async fn connect_module(
     match name {
         "controller" => {
             let start = find_start(&setup.terrain, &params, START_Y_M).map_err(config)?;
-            let mut config =
-                ControllerConfig::new((*setup.terrain).clone(), start).with_speed(setup.speed);
+            let mut config = ControllerConfig::new((*setup.terrain).clone(), start)
+                .with_speed(setup.speed)
+                .with_faults(setup.faults);
             config.bus_simulated_time = true;
             config.state_file = setup.state_dir.as_ref().map(|d| d.join("controller.state"));
             tca_controller_sim::connect(connector, config).await

@@ -7,6 +7,7 @@ use std::time::{Duration, Instant};
 use anyhow::Context as _;
 use serde::Serialize;
 use tca_central::StartOptions;
+use tca_controller_sim::sim::ScheduledFault;
 use tca_messages::control::TaskOutcome;
 use tca_module::{Connector, Module};
 use tca_single_leg_messages::{
@@ -46,6 +47,8 @@ pub struct WalkOptions {
     /// What the planners charge to simulated time (in-process only; modules running
     /// elsewhere were started with their own).
     pub compute: ComputeModel,
+    /// Inject this fault in the simulated Controller (in-process only).
+    pub fault: Option<ScheduledFault>,
 }
 
 /// One leg of a walk (forward, or back).
@@ -91,6 +94,9 @@ pub struct WalkReport {
     /// Wall-clock planning time per step (Gait Planner and Leg Recovery Planner computing),
     /// milliseconds (from the log; in-process only).
     pub planning_ms_per_step: Option<f64>,
+    /// Simulated seconds at which each step's body move ended, in order (from the log;
+    /// in-process only).
+    pub step_ends_s: Vec<f64>,
     /// Where the carriage started and ended.
     pub start_y_m: f64,
     /// Where the carriage ended.
@@ -125,11 +131,21 @@ pub async fn walk(
 ) -> anyhow::Result<WalkReport> {
     let started = Instant::now();
     let goal = options.goal_y_m.unwrap_or(DEFAULT_GOAL_Y_M);
-    if !goal.is_finite() {
-        anyhow::bail!("--goal must be a number of metres");
-    }
+    // Refused before anything starts (a system joined with `--connect` refuses it too: the
+    // Gait Planner checks every walk goal against its rails).
+    let rails = tca_robot::LegParams::default().rails;
+    tca_gait_planner::walk::check_goal(goal, &rails).map_err(|reason| anyhow::anyhow!(reason))?;
     let mut setup = SystemSetup::new(options.terrain.clone(), options.seed)?;
     setup.compute = options.compute;
+    if let Some(fault) = options.fault {
+        if options.connect.is_some() {
+            anyhow::bail!(
+                "a fault is injected in the walk's own simulated Controller, so it cannot be \
+                 given with --connect; walk in-process to inject {fault}"
+            );
+        }
+        setup.faults.scheduled = Some(fault);
+    }
     // In-process: central and every module here; else only the walker joins a running system.
     let (central, connector, _modules, log_path) = match &options.connect {
         Some(endpoint) => (None, Connector::zenoh(endpoint.clone()), Vec::new(), None),
@@ -144,6 +160,10 @@ pub async fn walk(
             let log = out.as_ref().map(|d| d.join("traffic.mcap"));
             let central = tca_central::start(StartOptions {
                 log: log.clone(),
+                config: tca_central::CentralConfig {
+                    simulated_time: true,
+                    ..tca_central::CentralConfig::default()
+                },
                 ..StartOptions::default()
             })
             .await
@@ -259,6 +279,7 @@ pub async fn walk(
         sim_time_s,
         wall_time_s,
         planning_ms_per_step: None,
+        step_ends_s: Vec::new(),
         start_y_m: start_y,
         final_y_m: final_y,
         legs,

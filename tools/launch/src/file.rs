@@ -5,6 +5,7 @@
 //! listen = ["tcp/127.0.0.1:7447"]   # zenoh endpoints (default tcp/127.0.0.1:7447)
 //! log = "out/traffic.mcap"          # optional traffic log
 //! policy = "policy.toml"            # optional: who may connect and what they may do
+//! simulated_time = true             # optional: central keeps the simulated clock
 //!
 //! [[module]]
 //! name = "echo"                     # a built-in module: runs `tca module echo --connect ...`
@@ -44,6 +45,9 @@ pub struct CentralSection {
     pub log: Option<PathBuf>,
     /// Policy file (authentication, authorisation, limits), as `tca central --policy`.
     pub policy: Option<PathBuf>,
+    /// Keep the system's simulated clock, as `tca central --simulated-time`.
+    #[serde(default)]
+    pub simulated_time: bool,
 }
 
 impl Default for CentralSection {
@@ -52,6 +56,7 @@ impl Default for CentralSection {
             listen: default_listen(),
             log: None,
             policy: None,
+            simulated_time: false,
         }
     }
 }

@@ -73,6 +73,7 @@ pub async fn up(launch: &Launch, exe: &Path) -> Result<Up, LaunchError> {
         listen: launch.central.listen.clone(),
         config: CentralConfig {
             policy,
+            simulated_time: launch.central.simulated_time,
             ..CentralConfig::default()
         },
     })

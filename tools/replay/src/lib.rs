@@ -274,6 +274,23 @@ fn read_record(path: &Path, root_goal: &str, how_to_record: &str) -> anyhow::Res
     })
 }
 
+/// Whether the recorded central kept the simulated clock: its welcomes say so.
+fn kept_simulated_clock(log: &LogFile) -> bool {
+    log.records.iter().any(|r| {
+        let tca_logs::RecordKind::Frame(f) = &r.kind else {
+            return false;
+        };
+        f.direction == tca_logs::Direction::Out
+            && f.class == Class::Control
+            && LogFile::envelope(f).is_ok_and(|env| {
+                matches!(
+                    tca_messages::control::ControlNotice::decode(env.name.as_str(), &env.data),
+                    Some(tca_messages::control::ControlNotice::Welcome(w)) if w.simulated_clock
+                )
+            })
+    })
+}
+
 /// The originator's root goals named `root_goal` (its other root tasks, such as drawing a map
 /// afterwards, are not replayed).
 fn replayed_roots(log: &LogFile, originator: &str, root_goal: &str) -> Vec<RootTask> {
@@ -370,8 +387,13 @@ pub async fn replay(plan: &ReplayPlan, live: &mut dyn LiveSide) -> anyhow::Resul
     let (dir, keep) = log_dir(plan.out.as_deref())?;
     let log_path = dir.join("traffic.mcap");
     live.prepare(&live_names, &dir)?;
+    // Central keeps the simulated clock if the recorded one did (its welcomes said so).
     let central = tca_central::start(StartOptions {
         log: Some(log_path.clone()),
+        config: tca_central::CentralConfig {
+            simulated_time: kept_simulated_clock(&recorded.log),
+            ..tca_central::CentralConfig::default()
+        },
         ..StartOptions::default()
     })
     .await

@@ -6,6 +6,10 @@
 //! exception when it was sent or when the module's previous one ended, whichever is later.
 //! A handler's clock follows the stamps of the answers it receives and advances by what it
 //! [`spend`](Module::spend)s. The module's own clock is the latest time any of them reached.
+//!
+//! On a central that keeps the system's simulated clock, central decides when each handler
+//! starts (the stamp it delivers the message with), and the module tells it what central could
+//! not see: when an inform's handler ended, and when a handler awaits a task's end.
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -64,11 +68,39 @@ impl Module {
     }
 
     /// The clock of a handler of a `class` message stamped `sent_ns` (simulated time only).
+    /// On central's simulated clock a handler starts at the stamp central delivered it with
+    /// (central judges capacity); otherwise by the module's own `HandlingClock`.
     pub(crate) fn handler_clock(&self, class: Class, sent_ns: u64) -> Option<Arc<AtomicU64>> {
         self.shared.sim_time.then(|| {
-            let start = self.shared.handling.start(class, sent_ns);
+            let start = if self.on_central_clock() {
+                sent_ns
+            } else {
+                self.shared.handling.start(class, sent_ns)
+            };
             Arc::new(AtomicU64::new(start))
         })
+    }
+
+    /// Whether this module runs on central's simulated clock.
+    pub fn on_central_clock(&self) -> bool {
+        self.shared.sim_time && self.shared.central_clock.load(Ordering::Relaxed)
+    }
+
+    /// Central's welcome said whether it keeps the simulated clock.
+    pub(crate) fn set_central_clock(&self, on: bool) {
+        self.shared.central_clock.store(on, Ordering::Relaxed);
+    }
+
+    /// Tells central this handler waits for the end of `task` (on central's simulated clock).
+    pub(crate) fn awaiting(&self, task: tca_messages::MessageId) -> crate::Result<()> {
+        if !self.on_central_clock() || self.handling.is_none() {
+            return Ok(());
+        }
+        let request =
+            tca_messages::control::ControlRequest::Await(tca_messages::control::Await { task });
+        let envelope =
+            self.envelope(Class::Control, request.name(), request.encode_data()?, None)?;
+        self.transmit(&envelope)
     }
 
     /// This handle's handler of a `class` message ended: the module's next goal, command or

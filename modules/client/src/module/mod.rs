@@ -58,6 +58,9 @@ pub(crate) struct Shared {
     closed: AtomicBool,
     /// Stamp envelopes with simulated time (see [`Module::spend`]) instead of the wall clock.
     sim_time: bool,
+    /// Central keeps the system's simulated clock (its welcome said so): it decides when each
+    /// handler starts, and hears when an inform's handler ended or a handler awaits a task.
+    central_clock: AtomicBool,
     /// The module's simulated time: the latest time it has seen or reached, nanoseconds.
     base_clock: AtomicU64,
     /// When its handlers start in simulated time.
@@ -79,6 +82,7 @@ pub(crate) struct Settings {
     pub(crate) requery_after_crash: u32,
     pub(crate) max_frame_bytes: usize,
     pub(crate) sim_time: bool,
+    pub(crate) central_clock: bool,
 }
 
 /// A module connected to central. Cheap to clone; the connection closes when the last clone
@@ -90,6 +94,9 @@ pub struct Module {
     pub(crate) context: Option<NodeId>,
     /// The running handler's simulated clock, when this handle belongs to one.
     pub(crate) clock: Option<Arc<AtomicU64>>,
+    /// The delivered message whose handler this handle belongs to (stamped on what it sends as
+    /// the envelope's `cause`).
+    pub(crate) handling: Option<MessageId>,
 }
 
 impl std::fmt::Debug for Module {
@@ -125,6 +132,8 @@ impl Task {
 pub struct WatchedTask {
     task: Task,
     outcome: oneshot::Receiver<Result<TaskOutcome>>,
+    /// The handler that sent it, which tells central it waits (simulated clock only).
+    waiter: Option<Module>,
 }
 
 impl WatchedTask {
@@ -147,6 +156,9 @@ impl WatchedTask {
     /// the task ([`ModuleError::Route`]), went away ([`ModuleError::CentralLost`]) or the link
     /// closed ([`ModuleError::Disconnected`]).
     pub async fn outcome(self) -> Result<TaskOutcome> {
+        if let Some(handler) = &self.waiter {
+            handler.awaiting(self.task.id)?;
+        }
         self.outcome.await.map_err(|_| ModuleError::Disconnected)?
     }
 }
@@ -173,6 +185,7 @@ impl Module {
                 requery_after_crash: settings.requery_after_crash,
                 closed: AtomicBool::new(false),
                 sim_time: settings.sim_time,
+                central_clock: AtomicBool::new(settings.central_clock),
                 base_clock: AtomicU64::new(0),
                 handling: HandlingClock::new(),
                 closed_signal: tokio::sync::watch::channel(false).0,
@@ -181,6 +194,7 @@ impl Module {
             }),
             context: None,
             clock: None,
+            handling: None,
         }
     }
 
@@ -200,6 +214,7 @@ impl Module {
             shared: self.shared.clone(),
             context: node,
             clock: self.clock.clone(),
+            handling: self.handling,
         }
     }
 }

@@ -31,6 +31,7 @@ impl Module {
                 shared,
                 context: None,
                 clock: None,
+                handling: None,
             })
         };
         // What central delivered while the module was still registering comes first.
@@ -149,6 +150,7 @@ impl Module {
             shared: self.shared.clone(),
             context: node,
             clock: self.handler_clock(class, envelope.timestamp_ns),
+            handling: Some(envelope.id),
         };
         let ctx = Context::new(
             handler_module.clone(),
@@ -185,11 +187,17 @@ impl Module {
             (class, Ok(_)) if class.runs_in_turn() => {
                 (Class::Success, encode_data(&()).unwrap_or_default())
             }
-            (_, Ok(_)) => return,
-            (Class::Inform, Err(reason)) => {
-                tracing::warn!(name = %request.name, %reason, "inform handler failed");
-                return;
+            (Class::Inform, result) => {
+                if let Err(reason) = result {
+                    tracing::warn!(name = %request.name, %reason, "inform handler failed");
+                }
+                if !self.on_central_clock() {
+                    return;
+                }
+                // On central's simulated clock, the end of an inform's handler is told too.
+                (Class::Success, encode_data(&()).unwrap_or_default())
             }
+            (_, Ok(_)) => return,
             (_, Err(reason)) => {
                 tracing::debug!(name = %request.name, %reason, "handler failed");
                 (

@@ -187,7 +187,12 @@ impl Module {
         }
         let (watch, outcome) = oneshot::channel();
         let task = self.send_task_raw(class, name, data, constraints, Some(watch))?;
-        Ok(WatchedTask { task, outcome })
+        let waiter = self.handling.is_some().then(|| self.clone());
+        Ok(WatchedTask {
+            task,
+            outcome,
+            waiter,
+        })
     }
 
     /// Sends a task's envelope; with a `watch`, central is asked to say how the task ends and
@@ -264,6 +269,7 @@ impl Module {
             context: self.context,
             node: None,
             correlation: None,
+            cause: self.handling,
             timestamp_ns: self.time_ns(),
             options: options.unwrap_or_default(),
             redelivery: 0,

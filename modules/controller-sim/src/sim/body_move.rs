@@ -8,7 +8,7 @@ use tca_robot::{Joint, JointPosition};
 
 use super::LegSimulator;
 use super::error::{Result, SimError};
-use super::faults::happens;
+use super::faults::{FaultKind, happens};
 use super::report::BodyMoveReport;
 use super::trajectory::JointTrajectory;
 
@@ -56,7 +56,8 @@ impl LegSimulator {
             return Err(SimError::FootNotPlanted);
         };
         let faults = self.faults;
-        let planned = Planned {
+        self.body_moves += 1;
+        let mut planned = Planned {
             slip_at: happens(&mut self.rng, faults.slip_probability)
                 .then(|| self.rng.random_range(0.1..0.9)),
             drop_at: happens(&mut self.rng, faults.force_drop_probability)
@@ -68,6 +69,20 @@ impl LegSimulator {
                 )
             }),
         };
+        let mut slip_distance_m = faults.slip_distance_m;
+        if let Some(fault) = faults.scheduled.filter(|f| f.body_move == self.body_moves) {
+            tracing::debug!(%fault, "injecting a scheduled fault");
+            match fault.kind {
+                FaultKind::Slip => {
+                    planned.slip_at = Some(0.5);
+                    // Far enough to be noticed.
+                    slip_distance_m =
+                        slip_distance_m.max(2.0 * self.params.body_move.slip_detect_m);
+                }
+                FaultKind::ForceDrop => planned.drop_at = Some(0.5),
+                FaultKind::LimitSwitch => planned.trip_at = Some((0.5, Joint::Elbow)),
+            }
+        }
         let bm = self.params.body_move;
         let start_y = self.carriage.y_m;
         tracing::debug!(start_y, target_y_m, "bodyMove");
@@ -183,7 +198,7 @@ impl LegSimulator {
                 && slid == 0.0
                 && slip_left == 0.0
             {
-                slip_left = faults.slip_distance_m;
+                slip_left = slip_distance_m;
             }
             if slid >= bm.slip_detect_m {
                 break Err(SimError::Slip {

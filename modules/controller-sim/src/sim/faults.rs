@@ -16,6 +16,76 @@ pub struct JointNoise {
     pub vertical_m: f64,
 }
 
+/// A fault that happens at a chosen moment rather than by chance.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FaultKind {
+    /// The foot slips during the body move (past `slip_detect_m`): a move failure, after
+    /// which the planners can replan from where the leg is.
+    Slip,
+    /// The foot force drops off during the body move: an emergency stop, a hardware fault.
+    ForceDrop,
+    /// A limit switch trips during the body move: a hardware fault.
+    LimitSwitch,
+}
+
+impl FaultKind {
+    /// Every kind, in the order the command line lists them.
+    pub const ALL: [FaultKind; 3] = [
+        FaultKind::Slip,
+        FaultKind::ForceDrop,
+        FaultKind::LimitSwitch,
+    ];
+
+    /// The name the command line uses (`slip`, `force-drop`, `limit-switch`).
+    pub fn name(self) -> &'static str {
+        match self {
+            FaultKind::Slip => "slip",
+            FaultKind::ForceDrop => "force-drop",
+            FaultKind::LimitSwitch => "limit-switch",
+        }
+    }
+}
+
+/// A fault injected half-way through the `body_move`-th body move since the simulator
+/// started (counted from 1: in a walk from the start, the body move of step `body_move` when
+/// nothing has been replanned).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ScheduledFault {
+    /// What happens.
+    pub kind: FaultKind,
+    /// During which body move, from 1.
+    pub body_move: u32,
+}
+
+impl ScheduledFault {
+    /// Parses `KIND@N` (`slip@3`, `force-drop@2`, `limit-switch@1`), saying what is wrong.
+    pub fn parse(text: &str) -> std::result::Result<Self, String> {
+        let kinds = FaultKind::ALL.map(FaultKind::name).join(", ");
+        let Some((kind, at)) = text.split_once('@') else {
+            return Err(format!(
+                "fault {text:?} is not KIND@STEP; give one of {kinds} and a step number, e.g. slip@3"
+            ));
+        };
+        let kind = FaultKind::ALL
+            .into_iter()
+            .find(|k| k.name() == kind.trim())
+            .ok_or_else(|| format!("no fault kind {kind:?}; the kinds are {kinds}"))?;
+        let body_move = at
+            .trim()
+            .parse::<u32>()
+            .ok()
+            .filter(|&n| n >= 1)
+            .ok_or_else(|| format!("fault step {at:?} must be a step number, 1 or more"))?;
+        Ok(Self { kind, body_move })
+    }
+}
+
+impl std::fmt::Display for ScheduledFault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}@{}", self.kind.name(), self.body_move)
+    }
+}
+
 /// Which faults to inject and how strongly. [`FaultConfig::none`] (the default) injects
 /// nothing and uses the rigid kinematics.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -38,6 +108,8 @@ pub struct FaultConfig {
     /// parameters. The real foot is off the rigid kinematics by this much, and body moves
     /// leave strain in the leg that is relieved at their end.
     pub compliance_scale: f64,
+    /// A fault at a chosen body move, on top of the chance ones.
+    pub scheduled: Option<ScheduledFault>,
 }
 
 impl Default for FaultConfig {
@@ -57,6 +129,7 @@ impl FaultConfig {
             limit_switch_probability: 0.0,
             joint_noise: JointNoise::default(),
             compliance_scale: 0.0,
+            scheduled: None,
         }
     }
 
@@ -99,4 +172,25 @@ pub(crate) fn gaussian(rng: &mut ChaCha8Rng) -> f64 {
 /// Whether an event of probability `p` happens.
 pub(crate) fn happens(rng: &mut ChaCha8Rng, p: f64) -> bool {
     p > 0.0 && rng.random::<f64>() < p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scheduled_faults_parse_and_print_back() {
+        for text in ["slip@3", "force-drop@1", "limit-switch@12"] {
+            assert_eq!(ScheduledFault::parse(text).unwrap().to_string(), text);
+        }
+        for (bad, says) in [
+            ("slip", "KIND@STEP"),
+            ("skid@2", "the kinds are slip, force-drop, limit-switch"),
+            ("slip@0", "1 or more"),
+            ("slip@x", "1 or more"),
+        ] {
+            let e = ScheduledFault::parse(bad).unwrap_err();
+            assert!(e.contains(says), "{bad}: {e}");
+        }
+    }
 }

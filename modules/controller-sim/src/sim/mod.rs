@@ -39,7 +39,7 @@ use rand_chacha::ChaCha8Rng;
 use tca_robot::{CarriagePose, ElbowBranch, HeightField, JointPosition, LegKinematics, LegParams};
 
 pub use error::{FailureKind, Result, SimError};
-pub use faults::{FaultConfig, JointNoise};
+pub use faults::{FaultConfig, FaultKind, JointNoise, ScheduledFault};
 pub use report::{BodyMoveReport, Contact, ForceReading, MoveReport, PathSample};
 pub use trajectory::JointTrajectory;
 
@@ -133,6 +133,8 @@ pub struct LegSimulator {
     clock: Duration,
     faults: FaultConfig,
     rng: ChaCha8Rng,
+    /// Body moves started so far (for scheduled faults).
+    body_moves: u32,
 }
 
 impl LegSimulator {
@@ -203,6 +205,7 @@ impl LegSimulator {
             clock: Duration::ZERO,
             faults: FaultConfig::none(),
             rng: ChaCha8Rng::seed_from_u64(0),
+            body_moves: 0,
         };
         if sim.planted.is_none() {
             let foot = sim.free_foot(&sim.joints);
