@@ -60,6 +60,7 @@ async fn walk_to(dir: &Path, mode: WalkMode) {
         connect: None,
         compute: ComputeModel::Paper,
         fault: None,
+        rigid: false,
     };
     let (tx, _rx) = mpsc::unbounded_channel();
     let report = within("walk", tca_walk::walk(&options, tx))

@@ -1,5 +1,6 @@
-//! The mission's promise: the leg walks down the obstacle courses autonomously, without
-//! striking anything; concurrent walking saves time; an impassable course stops safely.
+//! The mission's promise: the leg (compliant, as the report's was, unless rigid) walks down the
+//! obstacle courses autonomously, without striking anything; concurrent walking saves time;
+//! faults are replanned or halt the walk; an impassable course stops safely.
 
 mod common;
 
@@ -21,6 +22,7 @@ fn options(terrain: TerrainChoice, seed: u64) -> WalkOptions {
         connect: None,
         compute: ComputeModel::Paper,
         fault: None,
+        rigid: false,
     }
 }
 
@@ -193,5 +195,20 @@ async fn a_hardware_fault_halts_the_walk_with_the_reason() {
         );
         // Halted during the faulty step's body move: no further step was taken.
         assert!(report.final_y_m < 9.0, "{fault}: {report:#?}");
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_rigid_leg_walks_too() {
+    // `--rigid`: no deflection simulated and none compensated.
+    for mode in [WalkMode::Sequential, WalkMode::Concurrent] {
+        let report = walk(WalkOptions {
+            mode,
+            rigid: true,
+            backward: true,
+            ..options(TerrainChoice::Course(4), 1)
+        })
+        .await;
+        assert_clean(&report);
     }
 }

@@ -47,6 +47,10 @@ pub(crate) struct ModuleArgs {
     /// same DIR after a crash and it goes on where it was.
     #[arg(long, value_name = "DIR")]
     state: Option<std::path::PathBuf>,
+    /// A rigid leg: the Controller simulates no deflection and the planners compensate none.
+    /// Give every walking module of a system the same choice.
+    #[arg(long)]
+    rigid: bool,
 }
 
 pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
@@ -70,6 +74,7 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
             None => tca_controller_sim::SpeedFactor::AsFastAsPossible,
         },
         state_dir: args.state.clone(),
+        rigid: args.rigid,
     };
     let module = if args.name == "echo" {
         tca_ping::echo::connect(&connector, "echo").await

@@ -52,6 +52,11 @@ pub(crate) struct WalkArgs {
     /// walk with the reason.
     #[arg(long, value_name = "KIND@STEP", value_parser = parse_fault, conflicts_with = "connect")]
     fault: Option<ScheduledFault>,
+    /// A rigid leg: no deflection in the simulated Controller and none compensated by the
+    /// planners. By default the leg and rails deflect as the report's did (up to about 20 cm
+    /// for a leg move far out to the side) and the planners' kinematics compensate.
+    #[arg(long, conflicts_with = "connect")]
+    rigid: bool,
     /// Print the summary as one JSON object on the last line of stdout.
     #[arg(long)]
     json: bool,
@@ -78,6 +83,7 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         connect: args.connect.clone(),
         compute: args.compute.into(),
         fault: args.fault,
+        rigid: args.rigid,
     };
     let (tx, rx) = mpsc::unbounded_channel();
     let display = tokio::spawn(show_progress(rx));

@@ -291,6 +291,7 @@ async fn one_walk(
         connect: Some(endpoint.to_owned()),
         compute: options.compute,
         fault: None,
+        rigid: false,
     };
     let (tx, mut rx) = mpsc::unbounded_channel();
     let mut walk = tokio::spawn(async move { tca_walk::walk(&walk_options, tx).await });

@@ -135,6 +135,10 @@ pub struct ControllerConfig {
     pub start: StartPose,
     /// Faults to inject.
     pub faults: FaultConfig,
+    /// Compensate the leg's deflection with the calibrated model (`compliance.model_*`), as
+    /// the report's Controller did: the joints of `legMove` and of the joint readouts are
+    /// those of an ideal rigid leg, converted to and from the real joints through the model.
+    pub compensate_deflection: bool,
     /// Simulated time against wall-clock time.
     pub speed: SpeedFactor,
     /// Module name on the bus (default [`DEFAULT_MODULE_NAME`]).
@@ -163,6 +167,7 @@ impl ControllerConfig {
             params: LegParams::default(),
             start,
             faults: FaultConfig::none(),
+            compensate_deflection: false,
             speed: SpeedFactor::default(),
             module_name: DEFAULT_MODULE_NAME.to_owned(),
             replace: true,

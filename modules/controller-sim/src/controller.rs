@@ -10,7 +10,7 @@
 use std::time::Duration;
 
 use nalgebra::Point3;
-use tca_robot::{CarriagePose, JointPosition};
+use tca_robot::{CarriagePose, JointPosition, LegKinematics};
 use tokio::time::Instant;
 
 use crate::config::{ControllerConfig, Result, SpeedFactor};
@@ -110,6 +110,8 @@ pub struct Controller {
     idle: Duration,
     /// Since when the Controller is idle (meaningful when no move plays out).
     idle_since: Instant,
+    /// The calibrated kinematics the joint interface compensates with, if any.
+    calibrated: Option<LegKinematics>,
 }
 
 impl Controller {
@@ -126,7 +128,34 @@ impl Controller {
             collisions: 0,
             idle: Duration::ZERO,
             idle_since: now,
+            calibrated: config
+                .compensate_deflection
+                .then(|| LegKinematics::compensated(&config.params)),
         })
+    }
+
+    /// The real joints that put the deflected foot where the ideal rigid leg at `ideal`
+    /// would put it (the calibrated inverse kinematics); `ideal` itself without calibration
+    /// or when the model has no solution.
+    fn to_real(&self, ideal: &JointPosition) -> JointPosition {
+        let Some(cal) = &self.calibrated else {
+            return *ideal;
+        };
+        let target = self.sim.kinematics().forward(ideal);
+        cal.inverse_nearest(&target, ideal).unwrap_or(*ideal)
+    }
+
+    /// The ideal rigid leg's joints for where the model says the real joints `real` put the
+    /// foot.
+    fn to_ideal(&self, real: &JointPosition) -> JointPosition {
+        let Some(cal) = &self.calibrated else {
+            return *real;
+        };
+        let foot = cal.forward(real);
+        self.sim
+            .kinematics()
+            .inverse_nearest(&foot, real)
+            .unwrap_or(*real)
     }
 
     /// The simulator (its state is the end of the move in progress, if any).
@@ -248,6 +277,7 @@ impl Controller {
         collisions: u32,
     ) -> Snapshot {
         let kin = self.sim.kinematics();
+        let joints = self.to_ideal(&joints);
         let cart_leg = kin.forward(&joints);
         Snapshot {
             carriage,
@@ -271,6 +301,8 @@ impl Controller {
         self.begin(now);
         let start = self.sim.joint_leg_position();
         let before = self.before(now);
+        let real: Vec<JointPosition> = waypoints.iter().map(|q| self.to_real(q)).collect();
+        let waypoints = &real[..];
         let result = self.sim.leg_move(waypoints, transition).map(|_| ());
         let path = match &result {
             Err(e) if e.is_rejected() => None,

@@ -159,6 +159,12 @@ pub struct ComplianceParams {
     pub lateral_m_per_n: f64,
     /// Vertical deflection per newton of vertical load at full extension.
     pub vertical_m_per_n: f64,
+    /// The sag the Controller's and planners' calibrated kinematics compensate
+    /// ([`LegKinematics::compensated`](crate::LegKinematics::compensated)).
+    pub model_sag_m_per_m_reach: f64,
+    /// The rail torsion the calibrated kinematics compensate (fitted to measurements: a
+    /// little short of the real torsion, so compensated leg moves are a few centimetres off).
+    pub model_torsion_rad_per_m_offset: f64,
 }
 
 /// Foot/ground contact.
@@ -365,7 +371,7 @@ impl LegParams {
         for (key, value) in positive_checks {
             positive(key, value)?;
         }
-        let non_negative_checks: [(&'static str, f64); 7] = [
+        let non_negative_checks: [(&'static str, f64); 9] = [
             ("rails.friction_n", self.rails.friction_n),
             (
                 "compliance.sag_m_per_m_reach",
@@ -382,6 +388,14 @@ impl LegParams {
             (
                 "compliance.vertical_m_per_n",
                 self.compliance.vertical_m_per_n,
+            ),
+            (
+                "compliance.model_sag_m_per_m_reach",
+                self.compliance.model_sag_m_per_m_reach,
+            ),
+            (
+                "compliance.model_torsion_rad_per_m_offset",
+                self.compliance.model_torsion_rad_per_m_offset,
             ),
             (
                 "body_move.min_abs_elbow_rad",

@@ -25,6 +25,9 @@ pub struct ModuleOptions {
     pub speed: tca_controller_sim::SpeedFactor,
     /// Where the Controller and the LTM Manager keep what must survive their restart.
     pub state_dir: Option<PathBuf>,
+    /// A rigid leg (no deflection, nothing compensated) instead of the report's compliant
+    /// one; give every module of a system the same.
+    pub rigid: bool,
 }
 
 impl Default for ModuleOptions {
@@ -37,6 +40,7 @@ impl Default for ModuleOptions {
             compute: ComputeModel::default(),
             speed: tca_controller_sim::SpeedFactor::AsFastAsPossible,
             state_dir: None,
+            rigid: false,
         }
     }
 }
@@ -60,6 +64,7 @@ pub async fn connect_standalone(
     setup.compute = options.compute;
     setup.speed = options.speed;
     setup.state_dir = options.state_dir.clone();
+    setup.set_rigid(options.rigid);
     if let Some(dir) = &setup.out {
         std::fs::create_dir_all(dir).map_err(|source| ModuleError::Io {
             what: format!("cannot create {}", dir.display()),

@@ -41,8 +41,10 @@ pub struct SystemSetup {
     pub state_dir: Option<PathBuf>,
     /// Run the Gait Planner with these parameters instead of the shipped ones.
     pub gait_params: Option<tca_gait_planner::GaitParams>,
-    /// Faults the simulated Controller injects.
+    /// Faults the simulated Controller injects, and its leg's compliance.
     pub faults: FaultConfig,
+    /// The leg's parameters.
+    pub leg: LegParams,
 }
 
 /// What the planners charge to simulated time for their computing.
@@ -133,8 +135,20 @@ impl SystemSetup {
             compute: ComputeModel::default(),
             state_dir: None,
             gait_params: None,
-            faults: FaultConfig::none(),
+            // The leg deflects as the report's did (§4.3); the planners compensate.
+            faults: FaultConfig {
+                compliance_scale: 1.0,
+                ..FaultConfig::none()
+            },
+            leg: LegParams::default(),
         })
+    }
+
+    /// A rigid leg (`true`): no deflection in the simulated Controller and nothing
+    /// compensated; `false`: the compliant leg of the report, driven through the Controller's
+    /// calibrated kinematics.
+    pub fn set_rigid(&mut self, rigid: bool) {
+        self.faults.compliance_scale = if rigid { 0.0 } else { 1.0 };
     }
 
     fn steps_dir(&self) -> Option<PathBuf> {
@@ -157,13 +171,15 @@ pub async fn connect_module(
     connector: &Connector,
     setup: &SystemSetup,
 ) -> Result<Module, ModuleError> {
-    let params = LegParams::default();
+    let params = setup.leg.clone();
     match name {
         "controller" => {
             let start = find_start(&setup.terrain, &params, START_Y_M).map_err(config)?;
             let mut config = ControllerConfig::new((*setup.terrain).clone(), start)
                 .with_speed(setup.speed)
                 .with_faults(setup.faults);
+            // A compliant leg is driven through the calibrated kinematics (§7.1).
+            config.compensate_deflection = setup.faults.compliance_scale > 0.0;
             config.bus_simulated_time = true;
             config.state_file = setup.state_dir.as_ref().map(|d| d.join("controller.state"));
             tca_controller_sim::connect(connector, config).await
@@ -200,6 +216,7 @@ pub async fn connect_module(
                 simulated_time: true,
                 compute_time: setup.compute.lrp(),
                 reachability_compute_time: setup.compute.reachability(),
+                leg: params,
                 ..LrpConfig::default()
             };
             tca_lrp::connect(connector, config).await
@@ -209,6 +226,7 @@ pub async fn connect_module(
                 picture_dir: setup.steps_dir(),
                 simulated_time: true,
                 compute_time: setup.compute.gait(),
+                leg: params,
                 ..GaitConfig::default()
             };
             if let Some(params) = setup.gait_params {

@@ -49,6 +49,8 @@ pub struct WalkOptions {
     pub compute: ComputeModel,
     /// Inject this fault in the simulated Controller (in-process only).
     pub fault: Option<ScheduledFault>,
+    /// A rigid leg instead of the report's compliant one (in-process only).
+    pub rigid: bool,
 }
 
 /// One leg of a walk (forward, or back).
@@ -137,6 +139,7 @@ pub async fn walk(
     tca_gait_planner::walk::check_goal(goal, &rails).map_err(|reason| anyhow::anyhow!(reason))?;
     let mut setup = SystemSetup::new(options.terrain.clone(), options.seed)?;
     setup.compute = options.compute;
+    setup.set_rigid(options.rigid);
     if let Some(fault) = options.fault {
         if options.connect.is_some() {
             anyhow::bail!(

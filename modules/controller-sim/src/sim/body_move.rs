@@ -27,6 +27,25 @@ struct Planned {
 }
 
 impl LegSimulator {
+    /// Joints near `q` whose unloaded deflected foot is at `target` horizontally (carriage
+    /// frame; the vertical axis is set by the force servo afterwards).
+    fn relieved_joints(
+        &self,
+        target: &Point3<f64>,
+        q: &JointPosition,
+    ) -> std::result::Result<JointPosition, tca_robot::KinematicsError> {
+        let scale = self.faults.compliance_scale;
+        let mut relieved = self.kin.inverse_nearest(target, q)?;
+        if scale > 0.0 {
+            for _ in 0..6 {
+                let d = scale * self.kin.deflection(&relieved, &nalgebra::Vector3::zeros());
+                let aim = Point3::new(target.x - d.x, target.y - d.y, target.z);
+                relieved = self.kin.inverse_nearest(&aim, &relieved)?;
+            }
+        }
+        Ok(relieved)
+    }
+
     /// `bodyMove`: propels the carriage to world `target_y_m` with the foot planted.
     ///
     /// The foot is first pressed to the compression force (800 lb) and relieved to the
@@ -216,14 +235,12 @@ impl LegSimulator {
             return Err(error);
         }
 
-        // 3. Relieve the strain: put the joints where the rigid kinematics match the foot.
+        // 3. Relieve the strain: put the joints where the leg, deflected as it is when
+        //    unloaded, matches the foot.
         let fk = self.kin.forward(&q);
         let real = self.carriage.to_carriage(self.kin.carriage(), &foot);
         let strain = ((fk.x - real.x).powi(2) + (fk.y - real.y).powi(2)).sqrt();
-        if let Ok(mut relieved) = self
-            .kin
-            .inverse_nearest(&Point3::new(real.x, real.y, fk.z), &q)
-        {
+        if let Ok(mut relieved) = self.relieved_joints(&Point3::new(real.x, real.y, fk.z), &q) {
             relieved.vertical_m = self.vertical_for_force(&relieved, &foot, bm.traction_force_n);
             elapsed += JointTrajectory::plan(&self.kin, &q, &[relieved]).duration_s();
             self.joints = relieved;

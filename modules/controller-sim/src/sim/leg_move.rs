@@ -38,6 +38,28 @@ impl LegSimulator {
     ///
     /// The path is checked against the true terrain at least every
     /// `simulation.collision_step_m` of foot travel; a strike stops the leg at the contact
+    /// A foot that stands on the ground leaves it straight up: when the first way-point
+    /// lifts the foot and also moves it sideways, a pure lift to the first way-point's
+    /// height goes first, so the loaded foot is never dragged (a move planned ahead starts
+    /// from where the leg was expected to be, which compliance leaves a few centimetres
+    /// off).
+    fn lift_first(&self, waypoints: &[JointPosition]) -> Option<Vec<JointPosition>> {
+        let first = waypoints.first()?;
+        let now = self.joints;
+        let on_ground = self.planted.is_some() || self.gap(&self.free_foot(&now)) <= 0.0;
+        let sideways = (first.shoulder_rad - now.shoulder_rad).abs() > 1e-6
+            || (first.elbow_rad - now.elbow_rad).abs() > 1e-6;
+        if !(on_ground && sideways && first.vertical_m < now.vertical_m) {
+            return None;
+        }
+        let lift = JointPosition::new(now.shoulder_rad, now.elbow_rad, first.vertical_m);
+        Some(
+            std::iter::once(lift)
+                .chain(waypoints.iter().copied())
+                .collect(),
+        )
+    }
+
     /// with a [`SimError::Collision`]. Bad way-points are refused and the leg does not move.
     pub fn leg_move(
         &mut self,
@@ -45,6 +67,8 @@ impl LegSimulator {
         transition: bool,
     ) -> Result<MoveReport> {
         self.validate_waypoints(waypoints)?;
+        let lifted = self.lift_first(waypoints);
+        let waypoints = lifted.as_deref().unwrap_or(waypoints);
         let traj = JointTrajectory::plan(&self.kin, &self.joints, waypoints);
         let total = traj.duration_s();
         let dt = self.sample_step(&traj);

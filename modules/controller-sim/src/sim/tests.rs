@@ -451,7 +451,7 @@ fn compliance_moves_the_real_foot_off_the_commanded_one() {
         .deflection(&sim.joint_leg_position(), &nalgebra::Vector3::zeros());
     assert!(((real - commanded) - expected).norm() < 1e-12);
     let off = (real - commanded).norm();
-    assert!(off > 0.01 && off < 0.08, "{off}");
+    assert!(off > 0.01 && off < 0.25, "{off}");
     // A transition lands where the real foot is, lower than the encoders expect.
     let q = sim.joint_leg_position();
     let report = sim
