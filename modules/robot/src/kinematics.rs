@@ -596,7 +596,7 @@ mod tests {
     }
 
     #[test]
-    fn deflection_is_a_few_centimetres_and_grows_with_extension_and_load() {
+    fn deflection_is_up_to_some_decimetres_and_grows_with_extension_and_load() {
         let k = kin();
         let short = JointPosition::new(0.2, 0.5, 3.0);
         let long = JointPosition::new(0.2, 0.5, 4.5);
@@ -606,7 +606,9 @@ mod tests {
         let d_long = k.deflection(&long, &load).norm();
         assert!(d_long > d_short);
         assert!(k.deflection(&long, &load).norm() > k.deflection(&long, &zero).norm());
-        assert!(d_long > 0.01 && d_long < 0.08, "{d_long}");
+        // The rails' torsion dominates: a foot 2.2 m out to the side at full extension is
+        // swung nearly 20 cm (the report's leg moves were off by up to about 20 cm).
+        assert!(d_long > 0.01 && d_long < 0.25, "{d_long}");
     }
 
     #[test]
