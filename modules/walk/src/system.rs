@@ -43,8 +43,6 @@ pub struct SystemSetup {
     pub gait_params: Option<tca_gait_planner::GaitParams>,
     /// Faults the simulated Controller injects, and its leg's compliance.
     pub faults: FaultConfig,
-    /// The leg's parameters.
-    pub leg: LegParams,
 }
 
 /// What the planners charge to simulated time for their computing.
@@ -140,7 +138,6 @@ impl SystemSetup {
                 compliance_scale: 1.0,
                 ..FaultConfig::none()
             },
-            leg: LegParams::default(),
         })
     }
 
@@ -171,7 +168,7 @@ pub async fn connect_module(
     connector: &Connector,
     setup: &SystemSetup,
 ) -> Result<Module, ModuleError> {
-    let params = setup.leg.clone();
+    let params = LegParams::default();
     match name {
         "controller" => {
             let start = find_start(&setup.terrain, &params, START_Y_M).map_err(config)?;
@@ -216,7 +213,6 @@ pub async fn connect_module(
                 simulated_time: true,
                 compute_time: setup.compute.lrp(),
                 reachability_compute_time: setup.compute.reachability(),
-                leg: params,
                 ..LrpConfig::default()
             };
             tca_lrp::connect(connector, config).await
@@ -226,7 +222,6 @@ pub async fn connect_module(
                 picture_dir: setup.steps_dir(),
                 simulated_time: true,
                 compute_time: setup.compute.gait(),
-                leg: params,
                 ..GaitConfig::default()
             };
             if let Some(params) = setup.gait_params {
