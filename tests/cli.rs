@@ -202,6 +202,26 @@ fn bad_input_gets_clear_errors() {
         );
         assert!(!stderr(&out).contains("step  1"), "{}", stderr(&out));
     }
+
+    // An unknown body-move law, and the open-loop one with concurrent planning.
+    let out = tca(&["walk", "--body-move", "closed"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("use servo"), "{}", stderr(&out));
+    let out = tca(&[
+        "walk",
+        "--body-move",
+        "open-loop",
+        "--concurrent",
+        "--out",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("walk sequentially with --body-move open-loop"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!stderr(&out).contains("step  1"), "{}", stderr(&out));
 }
 
 #[test]

@@ -61,6 +61,7 @@ async fn walk_to(dir: &Path, mode: WalkMode) {
         compute: ComputeModel::Paper,
         fault: None,
         rigid: false,
+        body_move_law: Default::default(),
     };
     let (tx, _rx) = mpsc::unbounded_channel();
     let report = within("walk", tca_walk::walk(&options, tx))

@@ -23,6 +23,7 @@ fn options(terrain: TerrainChoice, seed: u64) -> WalkOptions {
         compute: ComputeModel::Paper,
         fault: None,
         rigid: false,
+        body_move_law: Default::default(),
     }
 }
 
@@ -210,5 +211,24 @@ async fn a_rigid_leg_walks_too() {
         })
         .await;
         assert_clean(&report);
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_reports_open_loop_body_move_falls_short_and_the_walk_stops_with_the_reason() {
+    // `--body-move open-loop`: each body move falls short, so the walk takes more steps, and
+    // it ends short of the goal, saying why, without a collision.
+    let servo = walk(options(TerrainChoice::Course(3), 1)).await;
+    let report = walk(WalkOptions {
+        body_move_law: tca_controller_sim::sim::BodyMoveLaw::OpenLoop,
+        ..options(TerrainChoice::Course(3), 1)
+    })
+    .await;
+    assert_eq!(report.collisions, 0, "{report:#?}");
+    assert!(report.steps > servo.steps + 2, "{report:#?}");
+    assert!(report.final_y_m > 9.0, "{report:#?}");
+    if !report.reached {
+        let reason = report.reason.as_deref().unwrap_or_default();
+        assert!(reason.contains("not advancing"), "{reason}");
     }
 }

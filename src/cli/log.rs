@@ -50,8 +50,10 @@ pub(crate) struct StatsArgs {
     /// when the modules ran on it).
     #[arg(long)]
     central_clock: bool,
-    /// Count messages per step as deliveries divided by the number of messages of this name.
-    #[arg(long, default_value = "planStep")]
+    /// Count messages per step as deliveries divided by the number of messages of this name
+    /// (default `bodyMove`: a walking step is one body move; a `planStep` that finds the
+    /// carriage at the goal plans nothing).
+    #[arg(long, default_value = "bodyMove")]
     step: String,
     /// Also draw the timeline (busy and waiting per module) to this PNG file.
     #[arg(long, value_name = "FILE")]

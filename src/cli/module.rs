@@ -51,6 +51,10 @@ pub(crate) struct ModuleArgs {
     /// Give every walking module of a system the same choice.
     #[arg(long)]
     rigid: bool,
+    /// How the Controller propels the carriage: `servo` (default) or `open-loop` (the
+    /// report's first, inaccurate procedure; see `tca walk --help`).
+    #[arg(long, value_name = "LAW", default_value = "servo")]
+    body_move: tca_controller_sim::sim::BodyMoveLaw,
 }
 
 pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
@@ -75,6 +79,7 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
         },
         state_dir: args.state.clone(),
         rigid: args.rigid,
+        body_move_law: args.body_move,
     };
     let module = if args.name == "echo" {
         tca_ping::echo::connect(&connector, "echo").await

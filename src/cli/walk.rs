@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Args;
-use tca_controller_sim::sim::ScheduledFault;
+use tca_controller_sim::sim::{BodyMoveLaw, ScheduledFault};
 use tca_single_leg_messages::WalkMode;
 use tca_walk::{Progress, TerrainChoice, WalkOptions};
 use tokio::sync::mpsc;
@@ -57,6 +57,17 @@ pub(crate) struct WalkArgs {
     /// for a leg move far out to the side) and the planners' kinematics compensate.
     #[arg(long, conflicts_with = "connect")]
     rigid: bool,
+    /// How the simulated Controller propels the carriage: `servo` (the default: a velocity
+    /// law on the carriage position, within a few centimetres) or `open-loop` (the report's
+    /// first procedure: the joints along a straight line in joint space to the angles for
+    /// the target; the carriage falls short by up to about half a metre over a metre).
+    #[arg(
+        long,
+        value_name = "LAW",
+        default_value = "servo",
+        conflicts_with = "connect"
+    )]
+    body_move: BodyMoveLaw,
     /// Print the summary as one JSON object on the last line of stdout.
     #[arg(long)]
     json: bool,
@@ -84,6 +95,7 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         compute: args.compute.into(),
         fault: args.fault,
         rigid: args.rigid,
+        body_move_law: args.body_move,
     };
     let (tx, rx) = mpsc::unbounded_channel();
     let display = tokio::spawn(show_progress(rx));

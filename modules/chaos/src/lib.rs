@@ -292,6 +292,7 @@ async fn one_walk(
         compute: options.compute,
         fault: None,
         rigid: false,
+        body_move_law: Default::default(),
     };
     let (tx, mut rx) = mpsc::unbounded_channel();
     let mut walk = tokio::spawn(async move { tca_walk::walk(&walk_options, tx).await });

@@ -139,6 +139,10 @@ pub struct ControllerConfig {
     /// the report's Controller did: the joints of `legMove` and of the joint readouts are
     /// those of an ideal rigid leg, converted to and from the real joints through the model.
     pub compensate_deflection: bool,
+    /// How `bodyMove` propels the carriage (default the servo on the carriage position;
+    /// [`BodyMoveLaw::OpenLoop`](crate::sim::BodyMoveLaw::OpenLoop) is the report's first,
+    /// inaccurate procedure).
+    pub body_move_law: crate::sim::BodyMoveLaw,
     /// Simulated time against wall-clock time.
     pub speed: SpeedFactor,
     /// Module name on the bus (default [`DEFAULT_MODULE_NAME`]).
@@ -168,6 +172,7 @@ impl ControllerConfig {
             start,
             faults: FaultConfig::none(),
             compensate_deflection: false,
+            body_move_law: crate::sim::BodyMoveLaw::Servo,
             speed: SpeedFactor::default(),
             module_name: DEFAULT_MODULE_NAME.to_owned(),
             replace: true,

@@ -121,6 +121,7 @@ impl Controller {
         let mut sim =
             LegSimulator::new(config.params.clone(), config.terrain.clone(), config.start)?;
         sim.set_faults(config.faults)?;
+        sim.set_body_move_law(config.body_move_law);
         Ok(Self {
             sim,
             speed: config.speed,

@@ -22,7 +22,7 @@ use tca_module::{
 use tca_robot::LegParams;
 use tca_single_leg_messages::{
     BodyMove, BodyPosition, ElbowSide, GlobalLegPosition, LegReachability, MapKind, MapRegion,
-    PlanStep, RecoverLeg, StepPlanned, WorldPoint,
+    PlanStep, RecoverLeg, StepPlanned, WalkMode, WorldPoint,
 };
 
 use crate::error::GaitError;
@@ -142,6 +142,11 @@ impl Shared {
             }
             Err(e) => return Err(e.into()),
         };
+        if let (Some(walk), None) = (ctx.origin(), step.start) {
+            self.walks
+                .step_starts_at(walk, body_y_m)
+                .map_err(HandlerError::new)?;
+        }
         let polygon = planner.map_polygon(&region);
         let resolution_m = planner.params().grid.resolution_m;
         let footfall = ctx
@@ -259,8 +264,12 @@ impl Shared {
             "step planned"
         );
         // Inside a walk (the step was sent in the context of the walk node), send the next
-        // step as this one's sibling, unless this one reaches the goal (Figure 5).
-        let reaches_goal = (plan.body_target_y_m - step.goal_y_m).abs() <= AT_GOAL_M;
+        // step as this one's sibling, unless this one reaches the goal (Figure 5). Walking
+        // sequentially, the step after the one planned to reach the goal is sent all the
+        // same: it asks the Controller where the carriage is and steps again if the body
+        // move fell short (or ends the walk, at the goal).
+        let reaches_goal = (plan.body_target_y_m - step.goal_y_m).abs() <= AT_GOAL_M
+            && step.mode == WalkMode::Concurrent;
         if let (Some(walk), false) = (ctx.origin(), reaches_goal) {
             let walk_ctx = ctx.in_context(Some(walk));
             let next = crate::walk::next_step(&step, plan.body_target_y_m, footfall, body.id());

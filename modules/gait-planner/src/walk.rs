@@ -40,7 +40,17 @@ struct WalkState {
     /// ends at once without planning.
     first_live_step: u32,
     live_steps: Vec<NodeId>,
+    /// Where the carriage stood when the last step was planned from the Controller's reading.
+    last_start_y_m: Option<f64>,
+    /// Steps in a row that found the carriage where the one before had.
+    stalled: u32,
 }
+
+/// A step that finds the carriage within this of where the step before found it has not
+/// advanced it, metres.
+pub const STALL_M: f64 = 0.005;
+/// A walk ends, failed, when this many steps in a row have not advanced the carriage.
+pub const MAX_STALLED_STEPS: u32 = 2;
 
 /// The walks in progress, by walk node.
 #[derive(Debug, Clone, Default)]
@@ -65,6 +75,29 @@ impl Walks {
         if let Some(w) = self.lock().get_mut(&walk) {
             w.steps_sent = w.steps_sent.max(step);
         }
+    }
+
+    /// Notes that a step of walk `walk` found the carriage at `body_y_m`; fails, saying why,
+    /// when [`MAX_STALLED_STEPS`] steps in a row have not moved it (the body moves are not
+    /// advancing the carriage, so stepping on would never end).
+    pub fn step_starts_at(&self, walk: NodeId, body_y_m: f64) -> Result<(), String> {
+        let mut all = self.lock();
+        let Some(w) = all.get_mut(&walk) else {
+            return Ok(());
+        };
+        let still = w
+            .last_start_y_m
+            .is_some_and(|before| (body_y_m - before).abs() < STALL_M);
+        w.stalled = if still { w.stalled + 1 } else { 0 };
+        w.last_start_y_m = Some(body_y_m);
+        if w.stalled >= MAX_STALLED_STEPS {
+            return Err(format!(
+                "the carriage has stayed at y = {body_y_m:.3} m for the last {} steps, short of \
+                 the goal {:.3} m: its body moves are not advancing it",
+                w.stalled, w.goal_y_m
+            ));
+        }
+        Ok(())
     }
 
     /// Whether step number `step` of walk `walk` was abandoned by a replan.
@@ -124,6 +157,8 @@ async fn start_walk(
             steps_sent: 1,
             first_live_step: 1,
             live_steps: Vec::new(),
+            last_start_y_m: None,
+            stalled: 0,
         },
     );
     tracing::info!(goal_y_m = walk.goal_y_m, mode = ?walk.mode, "walk started");
@@ -251,6 +286,37 @@ async fn replan(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_walk_whose_steps_do_not_move_the_carriage_is_stopped_with_the_reason() {
+        let walks = Walks::default();
+        let walk = NodeId(7);
+        walks.lock().insert(
+            walk,
+            WalkState {
+                goal_y_m: 9.5,
+                mode: WalkMode::Sequential,
+                replans: 0,
+                steps_sent: 1,
+                first_live_step: 1,
+                live_steps: Vec::new(),
+                last_start_y_m: None,
+                stalled: 0,
+            },
+        );
+        // Advancing steps, then one that found the carriage where it was: still walking.
+        for y in [1.0, 2.4, 3.9, 3.902, 5.0, 5.001] {
+            assert!(walks.step_starts_at(walk, y).is_ok(), "{y}");
+        }
+        // A second step in a row that did not move it ends the walk.
+        let e = walks.step_starts_at(walk, 5.003).unwrap_err();
+        assert!(
+            e.contains("5.003") && e.contains("9.500") && e.contains("2 steps"),
+            "{e}"
+        );
+        // A walk this module does not know is not judged.
+        assert!(walks.step_starts_at(NodeId(8), 1.0).is_ok());
+    }
 
     #[test]
     fn goals_off_the_rails_or_not_numbers_are_refused_with_the_range() {

@@ -86,6 +86,9 @@ pub struct RailParams {
     pub y_max_m: f64,
     /// Rolling friction the foot must overcome during a body move, newtons.
     pub friction_n: f64,
+    /// Breakaway friction: the pull that starts a standing carriage rolling (at least
+    /// `friction_n`), newtons.
+    pub breakaway_friction_n: f64,
 }
 
 /// Geometry of the leg and its three joint axes.
@@ -371,8 +374,12 @@ impl LegParams {
         for (key, value) in positive_checks {
             positive(key, value)?;
         }
-        let non_negative_checks: [(&'static str, f64); 9] = [
+        let non_negative_checks: [(&'static str, f64); 10] = [
             ("rails.friction_n", self.rails.friction_n),
+            (
+                "rails.breakaway_friction_n",
+                self.rails.breakaway_friction_n,
+            ),
             (
                 "compliance.sag_m_per_m_reach",
                 self.compliance.sag_m_per_m_reach,
@@ -411,6 +418,13 @@ impl LegParams {
         }
         rotary_axis("leg.shoulder", &l.shoulder)?;
         rotary_axis("leg.elbow", &l.elbow)?;
+        if self.rails.breakaway_friction_n < self.rails.friction_n {
+            return Err(invalid(
+                "rails.breakaway_friction_n",
+                self.rails.breakaway_friction_n,
+                "the breakaway friction of the carriage must be at least its rolling friction (rails.friction_n)",
+            ));
+        }
         if l.shoulder.min_rad < -std::f64::consts::PI || l.shoulder.max_rad > std::f64::consts::PI {
             return Err(invalid(
                 "leg.shoulder.max_rad",
@@ -578,10 +592,22 @@ mod tests {
 
     #[test]
     fn unknown_key_is_named() {
-        let text =
-            DEFAULT_PARAMS_TOML.replace("friction_n = 450.0", "friction_n = 450.0\nfrictoin = 1.0");
+        let text = DEFAULT_PARAMS_TOML.replace("y_max_m = 10.5", "y_max_m = 10.5\nfrictoin = 1.0");
         let err = LegParams::from_toml_str(&text).unwrap_err().to_string();
         assert!(err.contains("frictoin"), "{err}");
+    }
+
+    #[test]
+    fn a_breakaway_friction_below_the_rolling_one_is_refused() {
+        let text = DEFAULT_PARAMS_TOML.replace(
+            "breakaway_friction_n = 1150.0",
+            "breakaway_friction_n = 500.0",
+        );
+        let err = LegParams::from_toml_str(&text).unwrap_err().to_string();
+        assert!(
+            err.contains("breakaway_friction_n") && err.contains("rolling"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -28,6 +28,8 @@ pub struct ModuleOptions {
     /// A rigid leg (no deflection, nothing compensated) instead of the report's compliant
     /// one; give every module of a system the same.
     pub rigid: bool,
+    /// How the simulated Controller propels the carriage.
+    pub body_move_law: tca_controller_sim::sim::BodyMoveLaw,
 }
 
 impl Default for ModuleOptions {
@@ -41,6 +43,7 @@ impl Default for ModuleOptions {
             speed: tca_controller_sim::SpeedFactor::AsFastAsPossible,
             state_dir: None,
             rigid: false,
+            body_move_law: tca_controller_sim::sim::BodyMoveLaw::Servo,
         }
     }
 }
@@ -65,6 +68,7 @@ pub async fn connect_standalone(
     setup.speed = options.speed;
     setup.state_dir = options.state_dir.clone();
     setup.set_rigid(options.rigid);
+    setup.set_body_move_law(options.body_move_law);
     if let Some(dir) = &setup.out {
         std::fs::create_dir_all(dir).map_err(|source| ModuleError::Io {
             what: format!("cannot create {}", dir.display()),

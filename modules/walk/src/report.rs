@@ -10,7 +10,7 @@ use tca_messages::{Class, Message, decode_data};
 use tca_module::Module;
 use tca_robot::{CarriagePose, LegKinematics, LegParams};
 use tca_single_leg_messages::{
-    BodyMove, LegMove, MapKind, MapRegion, Overlay, PlanePoint, RenderMap, WorldPoint,
+    BodyMove, BodyPose, LegMove, MapKind, MapRegion, Overlay, PlanePoint, RenderMap, WorldPoint,
 };
 
 use crate::system::SystemSetup;
@@ -81,8 +81,9 @@ pub async fn map_picture(
     Ok(())
 }
 
-/// The leg's foot paths, from the `legMove` commands the Controller received and the
-/// carriage positions of the `bodyMove`s before them.
+/// The leg's foot paths, from the `legMove` commands the Controller received and where the
+/// carriage was then: the Controller's latest `bodyPosition` answer (a body move may fall
+/// short of its target), else the target of the latest `bodyMove`.
 pub fn leg_paths(log: &LogFile, start_y_m: f64) -> Vec<Vec<WorldPoint>> {
     let params = LegParams::default();
     let kin = LegKinematics::new(&params);
@@ -92,12 +93,20 @@ pub fn leg_paths(log: &LogFile, start_y_m: f64) -> Vec<Vec<WorldPoint>> {
         let RecordKind::Frame(f) = &record.kind else {
             continue;
         };
-        if f.direction != Direction::Out || f.class != Class::Command {
+        if f.direction != Direction::Out || !matches!(f.class, Class::Command | Class::Reply) {
             continue;
         }
         let Ok(env) = LogFile::envelope(f) else {
             continue;
         };
+        if f.class == Class::Reply {
+            if env.name.as_str() == "bodyPosition"
+                && let Ok(pose) = decode_data::<BodyPose>(&env.data)
+            {
+                carriage_y = pose.y_m;
+            }
+            continue;
+        }
         match env.name.as_str() {
             "bodyMove" => {
                 if let Ok(m) = decode_data::<BodyMove>(&env.data) {

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use tca_controller_sim::sim::FaultConfig;
+use tca_controller_sim::sim::{BodyMoveLaw, FaultConfig};
 use tca_controller_sim::{ControllerConfig, SpeedFactor};
 use tca_gait_planner::GaitConfig;
 use tca_ism::IsmConfig;
@@ -43,6 +43,8 @@ pub struct SystemSetup {
     pub gait_params: Option<tca_gait_planner::GaitParams>,
     /// Faults the simulated Controller injects, and its leg's compliance.
     pub faults: FaultConfig,
+    /// How the simulated Controller propels the carriage.
+    pub body_move_law: BodyMoveLaw,
 }
 
 /// What the planners charge to simulated time for their computing.
@@ -138,6 +140,7 @@ impl SystemSetup {
                 compliance_scale: 1.0,
                 ..FaultConfig::none()
             },
+            body_move_law: BodyMoveLaw::Servo,
         })
     }
 
@@ -146,6 +149,11 @@ impl SystemSetup {
     /// calibrated kinematics.
     pub fn set_rigid(&mut self, rigid: bool) {
         self.faults.compliance_scale = if rigid { 0.0 } else { 1.0 };
+    }
+
+    /// How the simulated Controller propels the carriage (the servo unless set).
+    pub fn set_body_move_law(&mut self, law: BodyMoveLaw) {
+        self.body_move_law = law;
     }
 
     fn steps_dir(&self) -> Option<PathBuf> {
@@ -177,6 +185,7 @@ pub async fn connect_module(
                 .with_faults(setup.faults);
             // A compliant leg is driven through the calibrated kinematics (§7.1).
             config.compensate_deflection = setup.faults.compliance_scale > 0.0;
+            config.body_move_law = setup.body_move_law;
             config.bus_simulated_time = true;
             config.state_file = setup.state_dir.as_ref().map(|d| d.join("controller.state"));
             tca_controller_sim::connect(connector, config).await

@@ -51,6 +51,9 @@ pub struct WalkOptions {
     pub fault: Option<ScheduledFault>,
     /// A rigid leg instead of the report's compliant one (in-process only).
     pub rigid: bool,
+    /// How the simulated Controller propels the carriage (in-process only): the servo, or
+    /// the report's first, open-loop procedure.
+    pub body_move_law: tca_controller_sim::sim::BodyMoveLaw,
 }
 
 /// One leg of a walk (forward, or back).
@@ -140,6 +143,14 @@ pub async fn walk(
     let mut setup = SystemSetup::new(options.terrain.clone(), options.seed)?;
     setup.compute = options.compute;
     setup.set_rigid(options.rigid);
+    if options.body_move_law == tca_controller_sim::sim::BodyMoveLaw::OpenLoop
+        && options.mode == WalkMode::Concurrent
+    {
+        anyhow::bail!(
+            "a concurrent walk plans each step from where the previous body move will leave the carriage, and the open-loop body move falls short by tens of centimetres; walk sequentially with --body-move open-loop, or concurrently with the servo"
+        );
+    }
+    setup.set_body_move_law(options.body_move_law);
     if let Some(fault) = options.fault {
         if options.connect.is_some() {
             anyhow::bail!(

@@ -18,13 +18,19 @@
 //! - [`trajectory`]: joint-space trajectories through way-points (speed-scaled segments,
 //!   constant-acceleration blends).
 //! - `leg_move.rs`: `legMove`, with terrain checks along the path and transition mode.
-//! - `body_move.rs`: `bodyMove`: compress, relieve, propel through the inverse Jacobian,
-//!   relieve strain.
+//! - `body_move.rs`: `bodyMove`: compress, relieve, propel (servo or open loop), relieve
+//!   strain; `body_move_law.rs`: the choice of [`BodyMoveLaw`].
+//! - `drive.rs`: how the planted foot drives the carriage: the compliant leg, the rails'
+//!   breakaway and rolling friction, the foot's traction.
 //! - [`faults`]: fault injection ([`FaultConfig`]).
 //! - [`report`]: move reports and force readings.
 //! - [`error`]: [`SimError`] and its [`FailureKind`].
 
+#[cfg(test)]
+mod accuracy_tests;
 mod body_move;
+mod body_move_law;
+mod drive;
 pub mod error;
 pub mod faults;
 mod leg_move;
@@ -38,6 +44,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use tca_robot::{CarriagePose, ElbowBranch, HeightField, JointPosition, LegKinematics, LegParams};
 
+pub use body_move_law::{BodyMoveLaw, UnknownBodyMoveLaw};
 pub use error::{FailureKind, Result, SimError};
 pub use faults::{FaultConfig, FaultKind, JointNoise, ScheduledFault};
 pub use report::{BodyMoveReport, Contact, ForceReading, MoveReport, PathSample};
@@ -135,6 +142,8 @@ pub struct LegSimulator {
     rng: ChaCha8Rng,
     /// Body moves started so far (for scheduled faults).
     body_moves: u32,
+    /// How body moves drive the joints.
+    body_move_law: BodyMoveLaw,
 }
 
 impl LegSimulator {
@@ -206,6 +215,7 @@ impl LegSimulator {
             faults: FaultConfig::none(),
             rng: ChaCha8Rng::seed_from_u64(0),
             body_moves: 0,
+            body_move_law: BodyMoveLaw::Servo,
         };
         if sim.planted.is_none() {
             let foot = sim.free_foot(&sim.joints);
@@ -228,6 +238,16 @@ impl LegSimulator {
         self.rng = ChaCha8Rng::seed_from_u64(faults.seed);
         self.faults = faults;
         Ok(())
+    }
+
+    /// Chooses how body moves drive the joints (the servo unless set).
+    pub fn set_body_move_law(&mut self, law: BodyMoveLaw) {
+        self.body_move_law = law;
+    }
+
+    /// How body moves drive the joints.
+    pub fn body_move_law(&self) -> BodyMoveLaw {
+        self.body_move_law
     }
 
     /// The faults being injected.

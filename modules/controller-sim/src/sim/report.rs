@@ -51,6 +51,12 @@ pub struct BodyMoveReport {
     pub strain_relieved_m: f64,
     /// Number of ~60 Hz control cycles of the propulsion.
     pub control_cycles: usize,
+    /// The procedure that propelled the carriage.
+    pub law: super::BodyMoveLaw,
+    /// Carriage Y commanded, metres (`final_y_m` less this is the move's error).
+    pub target_y_m: f64,
+    /// Path length the foot slid on the ground during the propulsion, metres.
+    pub foot_slid_m: f64,
 }
 
 /// A force/torque sensor reading: the force the ground exerts on the foot and its moment

@@ -296,7 +296,10 @@ fn body_move_reaches_its_target_with_the_foot_still() {
     let y = sim.body_position().y_m;
     assert!((y - 3.5).abs() <= 0.01, "{y}");
     assert!((report.final_y_m - y).abs() < 1e-12);
-    assert!((sim.true_foot_position() - foot).norm() < 1e-9);
+    // The foot holds (a rigid leg is modelled very stiff, not infinitely).
+    let slid = (sim.true_foot_position() - foot).norm();
+    assert!(slid < 1e-4, "{slid}");
+    assert!(report.foot_slid_m < 1e-4, "{}", report.foot_slid_m);
     // Rigid leg: the encoders agree with the pinned foot.
     assert!(
         (sim.global_leg_position().xy() - foot.xy()).norm() < 1e-3,
