@@ -243,3 +243,56 @@ fn a_normal_walk_prints_no_warnings() {
         );
     }
 }
+
+#[test]
+fn robot_show_describes_the_shipped_robots_and_refuses_bad_files() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["ambler", "hexapod", "athlete"] {
+        let png = dir.path().join(format!("{name}.png"));
+        let out = tca(&["robot", "show", name, "--png", png.to_str().unwrap()]);
+        assert!(out.status.success(), "{name}: {}", stderr(&out));
+        let text = stdout(&out);
+        assert!(
+            text.contains("6 legs") && text.contains("workspace"),
+            "{text}"
+        );
+        assert!(text.contains("stability margin"), "{text}");
+        let bytes = std::fs::read(&png).unwrap();
+        assert!(bytes.starts_with(b"\x89PNG"), "{name}");
+    }
+    let out = tca(&["robot", "show", "hexapod", "--json"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let v: serde_json::Value = serde_json::from_str(stdout(&out).trim()).unwrap();
+    assert_eq!(v["legs"].as_array().unwrap().len(), 6);
+    assert!(v["stability_margin_m"].as_f64().unwrap() > 0.0);
+    assert!(v["legs"][0]["workspace"]["reach_max_m"].as_f64().unwrap() > 0.0);
+    // A user's own file, and a broken one.
+    let own = dir.path().join("own.urdf");
+    std::fs::write(
+        &own,
+        r#"<robot name="stool">
+  <link name="base"><inertial><mass value="2"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="a_foot"/><link name="b_foot"/><link name="c_foot"/>
+  <joint name="a" type="prismatic"><parent link="base"/><child link="a_foot"/><origin xyz="0.3 0 0"/><axis xyz="0 0 -1"/><limit lower="0.2" upper="0.5" velocity="0.1" effort="10"/></joint>
+  <joint name="b" type="prismatic"><parent link="base"/><child link="b_foot"/><origin xyz="-0.15 0.26 0"/><axis xyz="0 0 -1"/><limit lower="0.2" upper="0.5" velocity="0.1" effort="10"/></joint>
+  <joint name="c" type="prismatic"><parent link="base"/><child link="c_foot"/><origin xyz="-0.15 -0.26 0"/><axis xyz="0 0 -1"/><limit lower="0.2" upper="0.5" velocity="0.1" effort="10"/></joint>
+</robot>"#,
+    )
+    .unwrap();
+    let out = tca(&["robot", "show", own.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stdout(&out).contains("robot stool") && stdout(&out).contains("3 legs"));
+    let bad = dir.path().join("bad.urdf");
+    std::fs::write(&bad, r#"<robot name="x"><link name="base"/><link name="a_foot"/><joint name="spin" type="continuous"><parent link="base"/><child link="a_foot"/></joint></robot>"#).unwrap();
+    let out = tca(&["robot", "show", bad.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        stderr(&out).contains("spin") && stderr(&out).contains("continuous"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(!stderr(&out).contains("panicked"));
+    let out = tca(&["robot", "show", "no-such-robot"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).contains("ambler"), "{}", stderr(&out));
+}

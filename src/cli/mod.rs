@@ -8,6 +8,7 @@ mod module;
 mod ping;
 mod registry;
 mod replay;
+mod robot;
 mod tree;
 mod up;
 mod walk;
@@ -49,6 +50,9 @@ enum Command {
     /// Draw a terrain map (elevation, uncertainty, footfall, slope) to PNG, from a running
     /// system or a traffic log.
     Map(map::MapArgs),
+    /// Multi-legged robot descriptions (URDF): what they say.
+    #[command(subcommand)]
+    Robot(robot::RobotCommand),
 }
 
 /// Where to find central (shared by the commands that connect).
@@ -123,6 +127,7 @@ pub(crate) fn main() -> ExitCode {
             Command::Tree(args) => tree::run(args).await,
             Command::Log(cmd) => log::run(cmd).await,
             Command::Map(args) => map::run(args).await,
+            Command::Robot(cmd) => robot::run(cmd).await,
         }
     });
     match result {
