@@ -190,37 +190,38 @@ impl Leg {
     /// joint offsets after the first joint, the longest prismatic extensions and the foot's
     /// offset. No target farther than this from the base can be reached.
     pub fn reach_bound(&self) -> f64 {
-        let offsets: f64 = self
-            .joints
-            .iter()
-            .skip(1)
-            .map(|j| j.origin.translation.vector.norm())
-            .sum();
         let extensions: f64 = self
             .joints
             .iter()
             .filter(|j| matches!(j.kind, JointKind::Prismatic { .. }))
             .map(|j| j.limits.lower.abs().max(j.limits.upper.abs()))
             .sum();
-        offsets + extensions + (self.foot_offset * self.contact_centre).coords.norm()
+        self.joint_offsets_m() + extensions + self.foot_offset_m()
+    }
+
+    /// The lengths of the offsets between successive joints (after the first), summed.
+    fn joint_offsets_m(&self) -> f64 {
+        self.joints
+            .iter()
+            .skip(1)
+            .map(|j| j.origin.translation.vector.norm())
+            .sum()
+    }
+
+    /// How far the contact-sphere centre is from the last joint's frame.
+    fn foot_offset_m(&self) -> f64 {
+        (self.foot_offset * self.contact_centre).coords.norm()
     }
 
     /// A length scale of the leg, metres: the sum of its joint offsets and prismatic
     /// travels, at least 1 mm. Sets the damping of the inverse kinematics.
     pub(crate) fn length_scale(&self) -> f64 {
-        let offsets: f64 = self
-            .joints
-            .iter()
-            .skip(1)
-            .map(|j| j.origin.translation.vector.norm())
-            .sum();
         let travel: f64 = self
             .joints
             .iter()
             .filter(|j| matches!(j.kind, JointKind::Prismatic { .. }))
             .map(|j| j.limits.span())
             .sum();
-        let foot = (self.foot_offset * self.contact_centre).coords.norm();
-        (offsets + travel + foot).max(1e-3)
+        (self.joint_offsets_m() + travel + self.foot_offset_m()).max(1e-3)
     }
 }
