@@ -14,16 +14,20 @@
 //! - [`controller`]: the robot's side: [`RobotModel`], [`BodyPose`], [`LegState`] queries;
 //!   [`LegMove`] and [`BodyMove`] commands; the [`FootContact`] inform.
 //! - [`exceptions`]: [`MoveFailed`], [`HardwareFault`], [`TipOver`].
+//! - [`walking`]: the [`LeggedWalk`] goal, the [`SupportState`] inform every support change
+//!   sends, and the Controller's counters ([`LeggedStatus`]).
 
 pub mod controller;
 pub mod exceptions;
 pub mod geometry;
+pub mod walking;
 
 pub use controller::{
     BodyMove, BodyPose, FootContact, LegMove, LegState, LegStateReply, RobotDescription, RobotModel,
 };
 pub use exceptions::{HardwareFault, MoveFailed, MoveFailureKind, TipOver};
 pub use geometry::{Pose, WorldPoint};
+pub use walking::{FootState, LeggedStatus, LeggedStatusReply, LeggedWalk, SupportState};
 
 #[cfg(test)]
 mod tests;

@@ -23,6 +23,9 @@ fn every_message_has_a_format_its_class_and_the_namespace() {
     check::<MoveFailed>(Class::Exception);
     check::<HardwareFault>(Class::Exception);
     check::<TipOver>(Class::Exception);
+    check::<LeggedWalk>(Class::Goal);
+    check::<SupportState>(Class::Inform);
+    check::<LeggedStatus>(Class::Query);
 }
 
 #[test]
