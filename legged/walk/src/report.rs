@@ -1,0 +1,141 @@
+//! The walk report: what a walk did, in a form an outside checker can verify against the
+//! terrain.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+use tca_legged_messages::SupportState;
+
+/// One foot in a recorded state.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FootRecord {
+    /// The foot's contact point (bottom of its contact sphere), world frame, metres.
+    pub at: [f64; 3],
+    /// Whether it stands.
+    pub stance: bool,
+}
+
+/// The robot at one support change.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StateRecord {
+    /// Simulated time, seconds from the start of the walk.
+    pub t_s: f64,
+    /// Body pose `[x, y, z, roll, pitch, yaw]`, world frame, metres and radians.
+    pub body: [f64; 6],
+    /// Centre of mass `[x, y, z]`, world frame, metres.
+    pub com: [f64; 3],
+    /// Every foot, by leg name.
+    pub feet: BTreeMap<String, FootRecord>,
+    /// Static stability margin of the centre of mass over the standing feet, metres.
+    pub margin_m: f64,
+}
+
+impl From<&SupportState> for StateRecord {
+    fn from(s: &SupportState) -> Self {
+        StateRecord {
+            t_s: s.t_s,
+            body: s.body.to_array(),
+            com: [s.com.x_m, s.com.y_m, s.com.z_m],
+            feet: s
+                .feet
+                .iter()
+                .map(|f| {
+                    (
+                        f.leg.clone(),
+                        FootRecord {
+                            at: [f.at.x_m, f.at.y_m, f.at.z_m],
+                            stance: f.stance,
+                        },
+                    )
+                })
+                .collect(),
+            margin_m: s.margin_m,
+        }
+    }
+}
+
+/// What happened on a walk. The first fields are the summary; `states` holds every support
+/// change so that the walk can be checked against the terrain.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LeggedWalkReport {
+    /// The body reached the goal (within the tolerance).
+    pub reached: bool,
+    /// Why not, if not.
+    pub reason: Option<String>,
+    /// Steps planned.
+    pub steps: usize,
+    /// Tip-overs.
+    pub falls: u32,
+    /// Contacts of the robot's links with the terrain.
+    pub collisions: u32,
+    /// The least stability margin over the recorded states, metres (`null` with no state).
+    pub min_stability_margin_m: Option<f64>,
+    /// Simulated time of the walk, seconds.
+    pub sim_time_s: f64,
+    /// Wall-clock time of the walk, seconds.
+    pub wall_time_s: f64,
+    /// Wall-clock planning time per step, milliseconds.
+    pub planning_ms_per_step: f64,
+    /// One entry per support change.
+    pub states: Vec<StateRecord>,
+    /// The robot.
+    pub robot: String,
+    /// The terrain.
+    pub terrain: String,
+    /// `sequential` or `concurrent`.
+    pub mode: String,
+    /// Where the body started: `[x, y, yaw]`.
+    pub start: [f64; 3],
+    /// The goal `[x, y]`.
+    pub goal: [f64; 2],
+    /// Horizontal distance from the body's origin to the goal at the end, metres.
+    pub distance_to_goal_m: f64,
+    /// Every foothold planned, in order: leg and world point.
+    pub footholds: Vec<(String, [f64; 3])>,
+    /// Files written.
+    pub outputs: Vec<PathBuf>,
+}
+
+impl LeggedWalkReport {
+    /// A few lines for people.
+    pub fn summary(&self) -> String {
+        let mut s = format!(
+            "{} on {} ({}): {}\n",
+            self.robot,
+            self.terrain,
+            self.mode,
+            if self.reached {
+                "reached the goal".to_string()
+            } else {
+                format!(
+                    "did not reach the goal: {}",
+                    self.reason.as_deref().unwrap_or("no reason given")
+                )
+            }
+        );
+        s += &format!(
+            "  {} steps, {} falls, {} collisions, least stability margin {}\n",
+            self.steps,
+            self.falls,
+            self.collisions,
+            self.min_stability_margin_m
+                .map_or("-".to_string(), |m| format!("{m:.3} m"))
+        );
+        s += &format!(
+            "  from ({:.2}, {:.2}) to ({:.2}, {:.2}): {:.2} m from the goal at the end\n",
+            self.start[0], self.start[1], self.goal[0], self.goal[1], self.distance_to_goal_m
+        );
+        s += &format!(
+            "  simulated {:.1} s, wall {:.1} s, planning {:.1} ms per step, {} states recorded\n",
+            self.sim_time_s,
+            self.wall_time_s,
+            self.planning_ms_per_step,
+            self.states.len()
+        );
+        for o in &self.outputs {
+            s += &format!("  wrote {}\n", o.display());
+        }
+        s
+    }
+}
