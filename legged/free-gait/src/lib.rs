@@ -1,1 +1,44 @@
-//! Work in progress.
+//! A free gait for any multi-legged robot described in URDF (`tca-legged-model`): any
+//! number and layout of legs.
+//!
+//! Each [`FreeGait::plan_step`] moves the body toward the goal and re-places one leg:
+//!
+//! 1. **Leg.** Every standing foot is tested for how far along the full body move (a
+//!    translation of up to `max_body_step_m` toward the goal, a turn toward it, the body at
+//!    its neutral height over the feet) it stays within reach; the legs that run out first,
+//!    then those farthest behind, are tried first.
+//! 2. **Body move.** The largest fraction of the move every standing leg can follow, or
+//!    less; each is checked every `sample_m` for inverse kinematics of every standing leg,
+//!    the stability margin over the standing feet (`tca_stability::margin_along_path` on
+//!    the centre of mass sampled along the move) and every link's collision shapes against
+//!    the terrain. If lifting the leg afterwards would leave less than `min_margin_m`, the
+//!    body also shifts toward the middle of the feet that stay.
+//! 3. **Foothold.** Candidates are drawn from the leg's sampled workspace, placed by the
+//!    body's new pose, and ranked by progress toward the goal, the terrain's
+//!    [`TerrainView::foothold_cost`] and the margin of the stance they give. Unknown ground
+//!    is never stepped on.
+//! 4. **Swing.** Lift, travel above the terrain with `clearance_m`, lower to a way-point
+//!    `below_foothold_m` under the foothold so that the executor's transition move stops at
+//!    contact. A leg with a vertical prismatic joint (the Ambler's kind) lifts and lowers
+//!    with that joint alone, as the single-leg testbed's Envelope Trajectory Finding
+//!    Algorithm does; any other leg reaches the raised points by inverse kinematics. Every
+//!    segment is a straight line in joint space, sampled for the foot's clearance, the
+//!    leg's link shapes and the margin of the feet that stay; higher travel is tried when
+//!    blocked.
+//!
+//! The moves use the model's own kinematics (`Leg::inverse_kinematics`,
+//! `Leg::foot_position`, `RobotModel::collision_shapes`), as the executor does.
+
+mod collision;
+pub mod error;
+pub mod gait;
+mod geometry;
+pub mod params;
+pub mod state;
+pub mod terrain;
+
+pub use error::GaitError;
+pub use gait::{FreeGait, stand};
+pub use params::GaitParams;
+pub use state::{Action, GaitState, LegGaitState, StepPlan};
+pub use terrain::{GridView, TerrainView};

@@ -1,0 +1,330 @@
+//! An ideal executor of step plans on the true terrain, and terrains to walk.
+
+#![allow(dead_code, unreachable_pub)]
+
+use std::sync::Arc;
+
+use nalgebra::{Isometry3, Point2, Point3, Vector3};
+use tca_free_gait::{Action, FreeGait, GaitError, GaitParams, GaitState, GridView, stand};
+use tca_legged_model::{IkOptions, RobotModel, Shape};
+use tca_robot::HeightField;
+use tca_stability::{stability_margin, support_polygon};
+
+/// Applies plans with the model's kinematics, refusing what a careful simulator would.
+pub struct Executor {
+    pub model: Arc<RobotModel>,
+    pub terrain: Arc<HeightField>,
+    /// Sample spacing along moves, metres.
+    pub step: f64,
+    /// Surface point spacing of the shapes, metres.
+    pub spacing: f64,
+    pub min_margin: f64,
+}
+
+fn margin_of(model: &RobotModel, body: &Isometry3<f64>, posture: &[Vec<f64>], feet: &[Point3<f64>]) -> f64 {
+    let polygon = support_polygon(&feet.iter().map(|p| Point2::new(p.x, p.y)).collect::<Vec<_>>());
+    let com = body * model.centre_of_mass(posture).expect("posture").centre;
+    stability_margin(&polygon, com)
+}
+
+impl Executor {
+    pub fn new(model: Arc<RobotModel>, terrain: Arc<HeightField>) -> Self {
+        let s = GaitParams::for_model(&model).scale;
+        Executor {
+            model,
+            terrain,
+            step: 0.01 * s,
+            spacing: 0.04 * s,
+            min_margin: f64::INFINITY,
+        }
+    }
+
+    /// How far the lowest point of a foot sphere is above the terrain under it (negative:
+    /// in the ground).
+    fn foot_gap(&self, c: &Point3<f64>, r: f64) -> f64 {
+        let mut gap = f64::INFINITY;
+        for ring in 0..=6 {
+            let d = r * ring as f64 / 6.0;
+            let count = if ring == 0 { 1 } else { 24 };
+            for k in 0..count {
+                let a = k as f64 * std::f64::consts::TAU / count as f64;
+                let h = self.terrain.height_at(c.x + d * a.cos(), c.y + d * a.sin());
+                gap = gap.min(c.z - (r * r - d * d).max(0.0).sqrt() - h);
+            }
+        }
+        gap
+    }
+
+    /// The first link shape touching the terrain, if any.
+    fn touching(&self, body: &Isometry3<f64>, posture: &[Vec<f64>]) -> Option<String> {
+        let top = self.terrain.max_height_m();
+        for s in self.model.collision_shapes(posture).expect("posture") {
+            let pose = body * s.pose;
+            let lowest = pose.translation.z - s.shape.depth_below(&pose);
+            if lowest > top {
+                continue;
+            }
+            for p in surface(&s.shape, self.spacing) {
+                let w = pose * p;
+                if w.z < top && w.z < self.terrain.height_at(w.x, w.y) {
+                    return Some(format!("{} at ({:.2}, {:.2}, {:.2})", s.link, w.x, w.y, w.z));
+                }
+            }
+        }
+        None
+    }
+
+    fn record(&mut self, m: f64) -> Result<(), String> {
+        self.min_margin = self.min_margin.min(m);
+        if m > 0.0 { Ok(()) } else { Err(format!("margin {m:.3} m: the robot tips over")) }
+    }
+
+    pub fn apply(&mut self, state: &mut GaitState, action: &Action) -> Result<(), String> {
+        match action {
+            Action::Body { target } => self.body(state, target),
+            Action::Swing { leg, waypoints, .. } => self.swing(state, *leg, waypoints),
+        }
+    }
+
+    fn body(&mut self, state: &mut GaitState, target: &Isometry3<f64>) -> Result<(), String> {
+        let stance = state.stance_legs();
+        if stance.len() < 3 {
+            return Err("a body move on fewer than three feet".into());
+        }
+        let feet: Vec<Point3<f64>> = stance.iter().map(|&i| state.legs[i].foot).collect();
+        let from = state.body;
+        let travel = (target.translation.vector - from.translation.vector).norm()
+            + from.rotation.angle_to(&target.rotation) * 3.0;
+        let n = ((travel / self.step).ceil() as usize).max(1);
+        let mut posture = state.posture();
+        for k in 1..=n {
+            let pose = from.lerp_slerp(target, k as f64 / n as f64);
+            for &i in &stance {
+                let leg = &self.model.legs()[i];
+                let centre = state.legs[i].foot + Vector3::z() * leg.foot_radius();
+                let s = leg
+                    .inverse_kinematics(&(pose.inverse() * centre), &IkOptions::starting_at(&posture[i]))
+                    .map_err(|e| format!("body move: {e}"))?;
+                posture[i] = s.joints;
+            }
+            self.record(margin_of(&self.model, &pose, &posture, &feet))?;
+            if let Some(t) = self.touching(&pose, &posture) {
+                return Err(format!("body move: collision of {t}"));
+            }
+        }
+        state.body = *target;
+        for (l, q) in state.legs.iter_mut().zip(posture) {
+            l.joints = q;
+        }
+        Ok(())
+    }
+
+    fn swing(&mut self, state: &mut GaitState, leg: usize, waypoints: &[Vec<f64>]) -> Result<(), String> {
+        let others: Vec<Point3<f64>> = (0..state.legs.len())
+            .filter(|&i| i != leg && state.legs[i].stance)
+            .map(|i| state.legs[i].foot)
+            .collect();
+        if others.len() < 3 {
+            return Err("lifting would leave fewer than three feet".into());
+        }
+        let model = self.model.clone();
+        let l = &model.legs()[leg];
+        let r = l.foot_radius();
+        let mut posture = state.posture();
+        let mut from = posture[leg].clone();
+        let body = state.body;
+        state.legs[leg].stance = false;
+        for (w, to) in waypoints.iter().enumerate() {
+            if !l.within_limits(to) {
+                return Err(format!("way-point {w} of leg {} is outside its joint limits", l.name()));
+            }
+            let last = w + 1 == waypoints.len();
+            let fa = l.foot_position(&from).unwrap();
+            let fb = l.foot_position(to).unwrap();
+            let n = (((fb - fa).norm() * 2.0 / self.step).ceil() as usize).max(2);
+            for k in 1..=n {
+                let t = k as f64 / n as f64;
+                let q: Vec<f64> = from.iter().zip(to).map(|(a, b)| a + (b - a) * t).collect();
+                let centre = body * l.foot_position(&q).unwrap();
+                let gap = self.foot_gap(&centre, r);
+                if last && gap <= 0.0 {
+                    posture[leg] = q.clone();
+                    state.legs[leg] = tca_free_gait::LegGaitState {
+                        joints: q,
+                        stance: true,
+                        foot: centre - Vector3::z() * r,
+                    };
+                    return Ok(());
+                }
+                if gap < -0.002 * (1.0 + r) && !(w == 0 && t < 0.5) {
+                    return Err(format!("leg {} drives its foot into the ground (gap {gap:.3})", l.name()));
+                }
+                posture[leg] = q.clone();
+                self.record(margin_of(&self.model, &body, &posture, &others))?;
+                if let Some(t) = self.touching(&body, &posture) {
+                    return Err(format!("swing of {}: collision of {t}", l.name()));
+                }
+            }
+            from = to.clone();
+        }
+        Err(format!("leg {} reached its last way-point without contact", l.name()))
+    }
+}
+
+/// Points on a shape's surface, its own frame.
+fn surface(shape: &Shape, d: f64) -> Vec<Point3<f64>> {
+    let n = |l: f64| ((l / d).ceil() as usize).clamp(1, 200);
+    let lin = |l: f64| {
+        let k = n(l);
+        (0..=k).map(move |i| -l / 2.0 + l * i as f64 / k as f64)
+    };
+    let mut out = Vec::new();
+    match *shape {
+        Shape::Box { size } => {
+            for x in lin(size.x) {
+                for y in lin(size.y) {
+                    for z in lin(size.z) {
+                        let on = (x.abs() - size.x / 2.0).abs() < 1e-12
+                            || (y.abs() - size.y / 2.0).abs() < 1e-12
+                            || (z.abs() - size.z / 2.0).abs() < 1e-12;
+                        if on {
+                            out.push(Point3::new(x, y, z));
+                        }
+                    }
+                }
+            }
+        }
+        Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
+            let around = n(std::f64::consts::TAU * radius).max(8);
+            let cap = if matches!(shape, Shape::Capsule { .. }) { radius } else { 0.0 };
+            for z in lin(length + 2.0 * cap) {
+                let rr = if z.abs() > length / 2.0 {
+                    (radius * radius - (z.abs() - length / 2.0).powi(2)).max(0.0).sqrt()
+                } else {
+                    radius
+                };
+                for f in [1.0, 0.5, 0.0] {
+                    if f < 1.0 && z.abs() < (length / 2.0 + cap) - 1e-12 {
+                        continue;
+                    }
+                    for k in 0..around {
+                        let a = k as f64 * std::f64::consts::TAU / around as f64;
+                        out.push(Point3::new(f * rr * a.cos(), f * rr * a.sin(), z));
+                    }
+                }
+            }
+        }
+        Shape::Sphere { radius } => {
+            for i in 0..=n(std::f64::consts::PI * radius).max(6) {
+                let polar = std::f64::consts::PI * i as f64 / n(std::f64::consts::PI * radius).max(6) as f64;
+                let around = n(std::f64::consts::TAU * radius * polar.sin()).max(1);
+                for k in 0..around {
+                    let a = k as f64 * std::f64::consts::TAU / around as f64;
+                    out.push(Point3::new(
+                        radius * polar.sin() * a.cos(),
+                        radius * polar.sin() * a.sin(),
+                        -radius * polar.cos(),
+                    ));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// How a walk ended.
+#[derive(Debug)]
+pub struct Walk {
+    pub steps: usize,
+    pub reached: bool,
+    pub error: Option<GaitError>,
+    pub min_margin: f64,
+    pub min_planned_margin: f64,
+    pub final_distance: f64,
+    pub seconds: f64,
+}
+
+/// Walks from (x, y, yaw) toward the goal with the ideal executor, at most `max_steps`.
+/// Panics on any refused or unstable action.
+pub fn walk(
+    robot: &str,
+    model: Arc<RobotModel>,
+    terrain: Arc<HeightField>,
+    start: (f64, f64, f64),
+    goal: Point2<f64>,
+    max_steps: usize,
+) -> Walk {
+    let params = GaitParams::for_model(&model);
+    let gait = FreeGait::new(model.clone(), params.clone());
+    let view = GridView::new(terrain.clone());
+    let mut state = stand(&model, &view, start.0, start.1, start.2).expect("the robot stands at the start");
+    let mut exec = Executor::new(model, terrain);
+    let began = std::time::Instant::now();
+    let mut min_planned = f64::INFINITY;
+    let mut error = None;
+    let mut steps = 0;
+    for _ in 0..max_steps {
+        match gait.plan_step(&state, &view, goal) {
+            Ok(plan) => {
+                assert!(
+                    plan.min_margin_m >= params.min_margin_m - 1e-9,
+                    "{robot}: planned margin {} below the minimum",
+                    plan.min_margin_m
+                );
+                min_planned = min_planned.min(plan.min_margin_m);
+                for action in &plan.actions {
+                    if let Err(e) = exec.apply(&mut state, action) {
+                        panic!("{robot} step {steps}: {e}\naction {action:?}");
+                    }
+                }
+                steps += 1;
+            }
+            Err(GaitError::GoalReached { .. }) => break,
+            Err(e) => {
+                error = Some(e);
+                break;
+            }
+        }
+    }
+    let t = state.body.translation.vector;
+    let final_distance = (Point2::new(t.x, t.y) - goal).norm();
+    Walk {
+        steps,
+        reached: final_distance <= params.goal_tolerance_m,
+        error,
+        min_margin: exec.min_margin,
+        min_planned_margin: min_planned,
+        final_distance,
+        seconds: began.elapsed().as_secs_f64(),
+    }
+}
+
+/// A height field from a function over a rectangle.
+pub fn field(min: (f64, f64), max: (f64, f64), cell: f64, f: impl Fn(f64, f64) -> f64) -> Arc<HeightField> {
+    let nx = ((max.0 - min.0) / cell).round() as usize + 1;
+    let ny = ((max.1 - min.1) / cell).round() as usize + 1;
+    let mut h = Vec::with_capacity(nx * ny);
+    for iy in 0..ny {
+        for ix in 0..nx {
+            h.push(f(min.0 + ix as f64 * cell, min.1 + iy as f64 * cell));
+        }
+    }
+    Arc::new(HeightField::new(Point2::new(min.0, min.1), cell, nx, ny, h).expect("height field"))
+}
+
+/// Smooth deterministic noise in [-1, 1].
+pub fn noise(x: f64, y: f64, seed: f64) -> f64 {
+    let a = (x * 1.7 + seed).sin() * (y * 1.3 - seed * 0.7).cos();
+    let b = (x * 3.1 - y * 2.3 + seed * 1.9).sin();
+    let c = (x * 0.6 + y * 0.9 + seed * 0.3).cos();
+    (a * 0.5 + b * 0.3 + c * 0.2).clamp(-1.0, 1.0)
+}
+
+/// Flat around (x0, y0) within `r`, `f` beyond, blended over a metre.
+pub fn with_flat_start(x0: f64, y0: f64, r: f64, blend: f64, f: impl Fn(f64, f64) -> f64) -> impl Fn(f64, f64) -> f64 {
+    move |x, y| {
+        let d = (x - x0).hypot(y - y0);
+        let w = ((d - r) / blend).clamp(0.0, 1.0);
+        w * f(x, y)
+    }
+}
