@@ -1,6 +1,7 @@
 //! The free gait: [`FreeGait`] plans one step at a time (a body move toward the goal, then
 //! one leg re-placed ahead).
 
+use std::collections::HashMap;
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point2, Point3, Translation3, UnitQuaternion, Vector2, Vector3};
@@ -24,7 +25,7 @@ const FOOTHOLDS_EVALUATED: usize = 12;
 /// Candidates looked at per leg and body target before giving up on finding more.
 const CANDIDATES_TRIED: usize = 400;
 /// Swings planned (the best footholds first) before giving up on a body target.
-const SWINGS_TRIED: usize = 6;
+const SWINGS_TRIED: usize = 12;
 /// Fractions of the full body move tested for each leg's reach.
 const REACH_FRACTIONS: usize = 6;
 
@@ -37,9 +38,19 @@ struct LegInfo {
     slide: Option<usize>,
     /// Foot-sphere centre at the neutral joints, body frame.
     neutral: Point3<f64>,
-    /// Candidate foot positions (x, y) in the body frame.
-    candidates: Vec<Point2<f64>>,
+    /// Candidate foot positions in the body frame.
+    candidates: Vec<Candidate>,
+    /// The candidate of each workspace cell.
+    cells: HashMap<(i64, i64), usize>,
     /// Lowest and highest foot-sphere centre in the body frame.
+    z_range: (f64, f64),
+}
+
+/// A candidate foot position: (x, y) in the body frame and the heights (body frame) the
+/// workspace samples reached there, widened a little.
+#[derive(Debug, Clone)]
+struct Candidate {
+    at: Point2<f64>,
     z_range: (f64, f64),
 }
 
@@ -90,6 +101,18 @@ pub struct FreeGait {
     height: f64,
 }
 
+impl LegInfo {
+    /// The body-frame heights the foot reaches over (x, y), from the workspace samples of
+    /// that cell; the whole sampled range when the cell has none.
+    fn z_at(&self, x: f64, y: f64, cell: f64) -> (f64, f64) {
+        let key = ((x / cell).round() as i64, (y / cell).round() as i64);
+        self.cells
+            .get(&key)
+            .map(|&k| self.candidates[k].z_range)
+            .unwrap_or(self.z_range)
+    }
+}
+
 impl FreeGait {
     /// A gait for a robot. Each leg's workspace is sampled once here (some milliseconds).
     pub fn new(model: Arc<RobotModel>, params: GaitParams) -> Self {
@@ -105,18 +128,31 @@ impl FreeGait {
                     (f64::INFINITY, f64::NEG_INFINITY),
                     |(lo, hi), p| (lo.min(p.z), hi.max(p.z)),
                 );
-                let band = 0.2 * (hi - lo).max(1e-6);
                 let cell = params.foothold_spacing_m.max(1e-4);
-                let mut cells: Vec<(i64, i64)> = samples
+                let mut cells: Vec<((i64, i64), f64)> = samples
                     .iter()
-                    .filter(|p| (p.z - neutral.z).abs() <= band)
-                    .map(|p| ((p.x / cell).round() as i64, (p.y / cell).round() as i64))
+                    .map(|p| (((p.x / cell).round() as i64, (p.y / cell).round() as i64), p.z))
                     .collect();
-                cells.sort_unstable();
-                cells.dedup();
-                let candidates = cells
-                    .into_iter()
-                    .map(|(i, j)| Point2::new(i as f64 * cell, j as f64 * cell))
+                cells.sort_unstable_by(|a, b| a.0.cmp(&b.0));
+                let slack = 0.1 * (hi - lo).max(1e-6);
+                let mut candidates: Vec<Candidate> = Vec::new();
+                for ((i, j), z) in cells {
+                    let at = Point2::new(i as f64 * cell, j as f64 * cell);
+                    match candidates.last_mut() {
+                        Some(c) if c.at == at => {
+                            c.z_range.0 = c.z_range.0.min(z - slack);
+                            c.z_range.1 = c.z_range.1.max(z + slack);
+                        }
+                        _ => candidates.push(Candidate {
+                            at,
+                            z_range: (z - slack, z + slack),
+                        }),
+                    }
+                }
+                let index = candidates
+                    .iter()
+                    .enumerate()
+                    .map(|(k, c)| (((c.at.x / cell).round() as i64, (c.at.y / cell).round() as i64), k))
                     .collect();
                 let slide = leg.joint_frames(&leg.neutral()).ok().and_then(|frames| {
                     leg.joints().iter().enumerate().position(|(k, j)| match j.kind() {
@@ -132,6 +168,7 @@ impl FreeGait {
                     slide,
                     neutral,
                     candidates,
+                    cells: index,
                     z_range: (lo, hi),
                 }
             })
@@ -356,6 +393,37 @@ impl FreeGait {
         })
     }
 
+    /// The level body's height at (x, y): within the heights at which every standing foot
+    /// stays in its leg's sampled workspace, at `height_bias` of the way from the lowest to
+    /// the highest; at the neutral height over the feet when they allow no height at all.
+    fn body_height(
+        &self,
+        state: &GaitState,
+        stance: &[usize],
+        x: f64,
+        y: f64,
+        rotation: &UnitQuaternion<f64>,
+    ) -> f64 {
+        let (mut low, mut high) = (f64::NEG_INFINITY, f64::INFINITY);
+        let mut mean = 0.0;
+        for &i in stance {
+            let info = &self.legs[i];
+            let centre = centre_of_contact(&state.legs[i].foot, info.radius);
+            mean += centre.z - info.neutral.z;
+            let local = rotation.inverse() * Vector3::new(centre.x - x, centre.y - y, 0.0);
+            let range = info.z_at(local.x, local.y, self.params.foothold_spacing_m);
+            // local z = centre.z - body z must lie in the range.
+            low = low.max(centre.z - range.1);
+            high = high.min(centre.z - range.0);
+        }
+        mean /= stance.len().max(1) as f64;
+        if low <= high {
+            low + self.params.height_bias * (high - low)
+        } else {
+            mean
+        }
+    }
+
     /// A walking step: choose the leg, the body move, the foothold and the swing.
     fn walk_step(
         &self,
@@ -372,15 +440,11 @@ impl FreeGait {
         let error = wrap(direction.y.atan2(direction.x) - yaw);
         let turn = error.clamp(-p.max_turn_rad, p.max_turn_rad);
         let advance = p.max_body_step_m.min(distance) * error.cos().max(0.0);
-        let mean_foot = stance.iter().map(|&i| state.legs[i].foot.z).sum::<f64>() / stance.len() as f64;
-        let full = Isometry3::from_parts(
-            Translation3::new(
-                here.x + direction.x * advance,
-                here.y + direction.y * advance,
-                mean_foot + self.height,
-            ),
-            UnitQuaternion::from_euler_angles(0.0, 0.0, yaw + turn),
-        );
+        let heading = yaw + turn;
+        let (x, y) = (here.x + direction.x * advance, here.y + direction.y * advance);
+        let rotation = UnitQuaternion::from_euler_angles(0.0, 0.0, heading);
+        let z = self.body_height(state, &stance, x, y, &rotation);
+        let full = Isometry3::from_parts(Translation3::new(x, y, z), rotation);
         // How far along the full move each standing foot stays within reach.
         let posture = state.posture();
         let mut reach = vec![1.0f64; state.legs.len()];
@@ -600,18 +664,18 @@ impl FreeGait {
         let ahead = info
             .candidates
             .iter()
-            .map(|c| (c - n).dot(&d))
+            .map(|c| (c.at - n).dot(&d))
             .fold(0.0f64, f64::max);
         let target = 0.8 * ahead;
-        let mut ranked: Vec<(f64, Point2<f64>)> = info
+        let mut ranked: Vec<(f64, &Candidate)> = info
             .candidates
             .iter()
             .map(|c| {
-                let rel = c - n;
+                let rel = c.at - n;
                 let along = rel.dot(&d);
                 let side = (rel.x * d.y - rel.y * d.x).abs();
                 let pre = -along.min(target) + 0.5 * (along - target).max(0.0) + 0.3 * side;
-                (pre / p.scale, *c)
+                (pre / p.scale, c)
             })
             .collect();
         ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -626,10 +690,11 @@ impl FreeGait {
         let (mut unknown, mut forbidden, mut unreachable, mut crowded, mut unstable, mut trapping) =
             (0, 0, 0, 0, 0, 0);
         let mut found = Vec::new();
-        for (pre, c) in ranked.into_iter().take(CANDIDATES_TRIED) {
+        for (pre, candidate) in ranked.into_iter().take(CANDIDATES_TRIED) {
             if found.len() >= FOOTHOLDS_EVALUATED {
                 break;
             }
+            let c = candidate.at;
             let w = body.target * Point3::new(c.x, c.y, info.neutral.z);
             let xy = Point2::new(w.x, w.y);
             if others.iter().any(|o| (Point2::new(o.x, o.y) - xy).norm() < spacing) {
@@ -653,11 +718,11 @@ impl FreeGait {
             };
             let centre = Point3::new(xy.x, xy.y, rest);
             let local = inverse * centre;
-            if local.z < info.z_range.0 - 1e-6 || local.z > info.z_range.1 + 1e-6 {
+            if local.z < candidate.z_range.0 || local.z > candidate.z_range.1 {
                 unreachable += 1;
                 continue;
             }
-            let Some(joints) = self.ik(leg, &local, &body.posture[leg], 2) else {
+            let Some(joints) = self.ik(leg, &local, &body.posture[leg], 0) else {
                 unreachable += 1;
                 continue;
             };
@@ -690,7 +755,8 @@ impl FreeGait {
                 new_margin = conservative;
             }
             let progress = (xy.x - old.x) * direction.x + (xy.y - old.y) * direction.y;
-            let score = pre + p.cost_weight * cost
+            let rise = (centre.z - old.z - info.radius).abs();
+            let score = pre + p.cost_weight * cost + rise / p.scale
                 - p.margin_weight * new_margin.min(5.0 * p.min_margin_m) / (5.0 * p.min_margin_m);
             found.push(Foothold {
                 centre,

@@ -1,7 +1,7 @@
 //! The free gait's parameters and their defaults for a robot.
 
 use serde::{Deserialize, Serialize};
-use tca_legged_model::RobotModel;
+use tca_legged_model::{JointKind, RobotModel};
 
 /// How the free gait plans. [`GaitParams::for_model`] scales every length to the robot.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -34,6 +34,10 @@ pub struct GaitParams {
     pub unknown_rise_m: f64,
     /// A step must advance the body or a foot toward the goal by at least this, metres.
     pub min_progress_m: f64,
+    /// Where the level body stands between the lowest and the highest height every
+    /// standing foot allows (0 lowest, 1 highest): high leaves room to lift feet over
+    /// obstacles and up slopes.
+    pub height_bias: f64,
     /// Length scale of the robot: 1 for the Ambler, about 0.1 for the hexapod.
     pub scale: f64,
 }
@@ -72,6 +76,17 @@ impl GaitParams {
             })
             .filter(|c| c.is_finite())
             .unwrap_or(height * 0.5);
+        // Legs that lift with a vertical slide (the Ambler's kind) keep their reach over the
+        // ground at any height, so their body rides high.
+        let lifts_vertically = !legs.is_empty()
+            && legs.iter().all(|l| {
+                l.joint_frames(&l.neutral()).is_ok_and(|frames| {
+                    l.joints().iter().zip(&frames).any(|(j, f)| match j.kind() {
+                        JointKind::Prismatic { axis } => (f.rotation * axis.into_inner()).z.abs() > 0.99,
+                        JointKind::Revolute { .. } => false,
+                    })
+                })
+            });
         GaitParams {
             min_margin_m: 0.10 * s,
             clearance_m: 0.05 * s,
@@ -85,6 +100,7 @@ impl GaitParams {
             goal_tolerance_m: 0.3 * s,
             unknown_rise_m: (clearance_under_body * 0.5).max(0.0),
             min_progress_m: 0.02 * s,
+            height_bias: if lifts_vertically { 0.8 } else { 0.5 },
             scale: s,
         }
     }

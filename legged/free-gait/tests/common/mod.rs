@@ -242,6 +242,7 @@ pub struct Walk {
     pub min_planned_margin: f64,
     pub final_distance: f64,
     pub seconds: f64,
+    pub planning_ms_per_step: f64,
 }
 
 /// Walks from (x, y, yaw) toward the goal with the ideal executor, at most `max_steps`.
@@ -263,8 +264,12 @@ pub fn walk(
     let mut min_planned = f64::INFINITY;
     let mut error = None;
     let mut steps = 0;
+    let mut planning = 0.0;
     for _ in 0..max_steps {
-        match gait.plan_step(&state, &view, goal) {
+        let t0 = std::time::Instant::now();
+        let planned = gait.plan_step(&state, &view, goal);
+        planning += t0.elapsed().as_secs_f64();
+        match planned {
             Ok(plan) => {
                 assert!(
                     plan.min_margin_m >= params.min_margin_m - 1e-9,
@@ -296,6 +301,7 @@ pub fn walk(
         min_planned_margin: min_planned,
         final_distance,
         seconds: began.elapsed().as_secs_f64(),
+        planning_ms_per_step: planning * 1e3 / (steps.max(1) as f64),
     }
 }
 
@@ -326,5 +332,71 @@ pub fn with_flat_start(x0: f64, y0: f64, r: f64, blend: f64, f: impl Fn(f64, f64
         let d = (x - x0).hypot(y - y0);
         let w = ((d - r) / blend).clamp(0.0, 1.0);
         w * f(x, y)
+    }
+}
+
+/// The Ambler's courses, about 28 x 14 m at 0.1 m, start (3, 0), goal (23, 0).
+pub mod ambler_courses {
+    use super::*;
+
+    pub const START: (f64, f64, f64) = (3.0, 0.0, 0.0);
+    pub const GOAL: (f64, f64) = (23.0, 0.0);
+
+    fn make(f: impl Fn(f64, f64) -> f64) -> Arc<HeightField> {
+        field((0.0, -7.0), (28.0, 7.0), 0.1, f)
+    }
+
+    pub fn flat() -> Arc<HeightField> {
+        make(|_, _| 0.0)
+    }
+
+    /// Smooth bumps of up to about 0.25 m.
+    pub fn rough() -> Arc<HeightField> {
+        make(with_flat_start(3.0, 0.0, 3.5, 1.5, |x, y| 0.25 * noise(x, y, 1.0)))
+    }
+
+    /// Boulders (spherical caps) up to 1 m high over x 7..21.
+    pub fn boulders() -> Arc<HeightField> {
+        let mut rocks = Vec::new();
+        let mut s = 12345u64;
+        let mut rnd = || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for _ in 0..40 {
+            let x = 7.0 + 14.0 * rnd();
+            let y = -5.0 + 10.0 * rnd();
+            let h = 0.3 + 0.7 * rnd();
+            let r = 0.5 + 0.7 * rnd();
+            rocks.push((x, y, h, r));
+        }
+        make(move |x, y| {
+            rocks
+                .iter()
+                .map(|&(bx, by, h, r)| {
+                    let d2 = (x - bx).powi(2) + (y - by).powi(2);
+                    // A spherical cap of height h and base radius r.
+                    let big = (r * r + h * h) / (2.0 * h);
+                    let z = (big * big - d2).max(0.0).sqrt() - (big - h);
+                    z.max(0.0)
+                })
+                .fold(0.0, f64::max)
+        })
+    }
+
+    /// A ditch 1 m wide and 1.5 m deep across the course at x 12..13.
+    pub fn ditch() -> Arc<HeightField> {
+        make(|x, _| if (12.0..=13.0).contains(&x) { -1.5 } else { 0.0 })
+    }
+
+    /// A 25 degree climb from x = 9 to x = 15, then a plateau.
+    pub fn slope() -> Arc<HeightField> {
+        let t = 25f64.to_radians().tan();
+        make(move |x, _| ((x - 9.0).clamp(0.0, 6.0)) * t)
+    }
+
+    /// A chasm 5 m wide and 3 m deep at x 10..15: no way across.
+    pub fn chasm() -> Arc<HeightField> {
+        make(|x, _| if (10.0..=15.0).contains(&x) { -3.0 } else { 0.0 })
     }
 }
