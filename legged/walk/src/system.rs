@@ -1,0 +1,78 @@
+//! The legged walking system's modules, connected with the settings one walk shares: the
+//! simulated Controller, the body-mounted scanner (ISM), the scrolling terrain map (LTM
+//! Manager) and the walking module with its free gait.
+
+use std::sync::Arc;
+
+use tca_legged_controller::LeggedControllerConfig;
+use tca_legged_model::RobotModel;
+use tca_legged_sim::{SimParams, StartPose};
+use tca_module::{Connector, Module, ModuleError};
+use tca_robot::HeightField;
+
+use crate::gait_module::GaitModuleConfig;
+use crate::terrain::max_reach;
+
+/// Names of the legged walking modules, in the order they are connected.
+pub const LEGGED_MODULES: &[&str] = &["controller", "ism", "ltm", "gait"];
+
+/// What the modules of one legged walk share.
+#[derive(Clone, Debug)]
+pub struct LeggedSetup {
+    /// The robot.
+    pub model: Arc<RobotModel>,
+    /// Its URDF text (the Controller hands it to planners that ask).
+    pub urdf: String,
+    /// The terrain (the simulator's truth and the scanner's scene).
+    pub terrain: Arc<HeightField>,
+    /// Where the body starts.
+    pub start: StartPose,
+    /// Seed of the scanner noise.
+    pub seed: u64,
+}
+
+impl LeggedSetup {
+    /// Half the side of the map the walking module asks for: the region the feet can reach
+    /// from where the step leaves the body, with room for a body move.
+    pub fn map_half_side_m(&self) -> f64 {
+        2.0 * max_reach(&self.model)
+    }
+
+    /// The map's cell: a tenth of the longest leg's reach, at most 0.1 m.
+    pub fn map_cell_m(&self) -> f64 {
+        (max_reach(&self.model) / 20.0).clamp(0.01, 0.1)
+    }
+}
+
+/// Connects one legged walking module.
+pub async fn connect_module(
+    name: &str,
+    connector: &Connector,
+    setup: &LeggedSetup,
+) -> Result<Module, ModuleError> {
+    match name {
+        "controller" => {
+            let config = LeggedControllerConfig {
+                model: setup.model.clone(),
+                urdf: setup.urdf.clone(),
+                terrain: setup.terrain.clone(),
+                start: setup.start,
+                params: SimParams::for_model(&setup.model),
+                module_name: "controller".into(),
+            };
+            tca_legged_controller::connect(connector, config).await
+        }
+        "gait" => {
+            let config = GaitModuleConfig::new(
+                setup.model.clone(),
+                setup.map_half_side_m(),
+                setup.map_cell_m(),
+            );
+            crate::gait_module::connect(connector, config).await
+        }
+        other => Err(ModuleError::Usage(format!(
+            "no legged walking module named {other:?}; they are {}",
+            LEGGED_MODULES.join(", ")
+        ))),
+    }
+}
