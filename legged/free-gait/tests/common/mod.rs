@@ -33,7 +33,7 @@ impl Executor {
         Executor {
             model,
             terrain,
-            step: 0.01 * s,
+            step: 0.02 * s,
             spacing: 0.04 * s,
             min_margin: f64::INFINITY,
         }
@@ -57,10 +57,11 @@ impl Executor {
 
     /// The first link shape touching the terrain, if any.
     fn touching(&self, body: &Isometry3<f64>, posture: &[Vec<f64>]) -> Option<String> {
-        let top = self.terrain.max_height_m();
         for s in self.model.collision_shapes(posture).expect("posture") {
             let pose = body * s.pose;
             let lowest = pose.translation.z - s.shape.depth_below(&pose);
+            let centre = Point2::new(pose.translation.x, pose.translation.y);
+            let top = self.terrain.max_height_in_disc(centre, s.shape.bounding_radius());
             if lowest > top {
                 continue;
             }
@@ -398,5 +399,81 @@ pub mod ambler_courses {
     /// A chasm 5 m wide and 3 m deep at x 10..15: no way across.
     pub fn chasm() -> Arc<HeightField> {
         make(|x, _| if (10.0..=15.0).contains(&x) { -3.0 } else { 0.0 })
+    }
+}
+
+/// URDF text of a walker with insect-like coxa-femur-tibia legs (the shipped hexapod's
+/// leg), one at each hip `(name, x, y, yaw)`, on a body plate of `length` x `width`.
+pub fn insect_urdf(name: &str, length: f64, width: f64, hips: &[(&str, f64, f64, f64)]) -> String {
+    let mut s = format!(
+        r#"<?xml version="1.0"?>
+<robot name="{name}">
+  <link name="body">
+    <inertial><origin xyz="0 0 0"/><mass value="1.5"/><inertia ixx="0.005" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.014"/></inertial>
+    <collision><origin xyz="0 0 0"/><geometry><box size="{length} {width} 0.06"/></geometry></collision>
+  </link>
+"#
+    );
+    for (leg, x, y, yaw) in hips {
+        s.push_str(&format!(
+            r#"  <joint name="{leg}_hip_yaw" type="revolute">
+    <origin xyz="{x} {y} 0" rpy="0 0 {yaw}"/>
+    <parent link="body"/><child link="{leg}_coxa"/>
+    <axis xyz="0 0 1"/><limit lower="-0.7" upper="0.7" velocity="5" effort="2.5"/>
+  </joint>
+  <link name="{leg}_coxa">
+    <inertial><origin xyz="0.0275 0 0"/><mass value="0.04"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial>
+    <collision><origin xyz="0.0275 0 0"/><geometry><box size="0.055 0.03 0.03"/></geometry></collision>
+  </link>
+  <joint name="{leg}_hip_pitch" type="revolute">
+    <origin xyz="0.055 0 0"/>
+    <parent link="{leg}_coxa"/><child link="{leg}_femur"/>
+    <axis xyz="0 -1 0"/><limit lower="-1" upper="1.4" velocity="5" effort="2.5"/>
+  </joint>
+  <link name="{leg}_femur">
+    <inertial><origin xyz="0.08 0 0"/><mass value="0.08"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/></inertial>
+    <collision><origin xyz="0.08 0 0"/><geometry><box size="0.16 0.03 0.02"/></geometry></collision>
+  </link>
+  <joint name="{leg}_knee" type="revolute">
+    <origin xyz="0.16 0 0" rpy="0 1.5708 0"/>
+    <parent link="{leg}_femur"/><child link="{leg}_tibia"/>
+    <axis xyz="0 -1 0"/><limit lower="-1.2" upper="1.2" velocity="5" effort="2.5"/>
+  </joint>
+  <link name="{leg}_tibia">
+    <inertial><origin xyz="0.1 0 0" rpy="0 1.5708 0"/><mass value="0.06"/><inertia ixx="2e-4" ixy="0" ixz="0" iyy="2e-4" iyz="0" izz="3e-6"/></inertial>
+    <collision><origin xyz="0.1 0 0" rpy="0 1.5708 0"/><geometry><cylinder radius="0.01" length="0.2"/></geometry></collision>
+  </link>
+  <joint name="{leg}_tip" type="fixed">
+    <origin xyz="0.23 0 0"/><parent link="{leg}_tibia"/><child link="{leg}_foot"/>
+  </joint>
+  <link name="{leg}_foot">
+    <inertial><origin xyz="0 0 0"/><mass value="0.02"/><inertia ixx="1e-6" ixy="0" ixz="0" iyy="1e-6" iyz="0" izz="1e-6"/></inertial>
+    <collision><origin xyz="0 0 0"/><geometry><sphere radius="0.012"/></geometry></collision>
+  </link>
+"#
+        ));
+    }
+    s.push_str("</robot>\n");
+    s
+}
+
+/// The hexapod's courses, about 3.5 x 1.5 m at 0.02 m, start (0.3, 0), goal (3.2, 0).
+pub mod hexapod_courses {
+    use super::*;
+
+    pub const START: (f64, f64, f64) = (0.3, 0.0, 0.0);
+    pub const GOAL: (f64, f64) = (3.2, 0.0);
+
+    fn make(f: impl Fn(f64, f64) -> f64) -> Arc<HeightField> {
+        field((-0.2, -0.75), (3.6, 0.75), 0.02, f)
+    }
+
+    pub fn flat() -> Arc<HeightField> {
+        make(|_, _| 0.0)
+    }
+
+    /// Bumps of up to about 4 cm.
+    pub fn rough() -> Arc<HeightField> {
+        make(with_flat_start(0.3, 0.0, 0.35, 0.15, |x, y| 0.04 * noise(x * 10.0, y * 10.0, 2.0)))
     }
 }
