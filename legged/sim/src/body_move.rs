@@ -121,7 +121,9 @@ impl LeggedSim {
             // Refuse at the first sample where the margin falls short, before solving
             // the rest of the move.
             let margin = stability_margin(&support, com);
-            if !(margin >= self.params.min_body_margin_m) && self.params.refuse_unstable_moves {
+            if crate::sim::short_of(margin, self.params.min_body_margin_m)
+                && self.params.refuse_unstable_moves
+            {
                 return Err(unstable(margin, self.params.min_body_margin_m));
             }
             plan.push(Planned {
@@ -170,7 +172,7 @@ impl LeggedSim {
             self.body = p.body;
             self.posture = p.posture;
             self.advance(&mut report, p.t);
-            if !(margin >= 0.0) {
+            if crate::sim::short_of(margin, 0.0) {
                 self.last = Some(report);
                 return Err(self.tip_over(CMD, margin));
             }

@@ -44,7 +44,7 @@ impl BlockMax {
     }
 
     /// An upper bound of the surface over the square of half-side `r` about `c`.
-    fn bound(&self, terrain: &HeightField, c: Point2<f64>, r: f64) -> f64 {
+    pub(crate) fn bound(&self, terrain: &HeightField, c: Point2<f64>, r: f64) -> f64 {
         let (xs, ys) = sample_range(terrain, c, r);
         let mut best = f64::NEG_INFINITY;
         for by in ys.start / BLOCK..=(ys.end - 1) / BLOCK {

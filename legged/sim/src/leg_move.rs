@@ -38,6 +38,45 @@ struct Reached {
 
 const CMD: MoveCommand = MoveCommand::Leg;
 
+/// How far a point of the leg can travel per unit of each joint's motion along a segment
+/// from `a` to `b`: for a revolute joint the largest distance from its axis to the foot
+/// sphere's far side or to a later joint, at either end (the slides between move linearly,
+/// so the ends bound it); 1 for a prismatic joint. Summed over the joints times their
+/// motion, it bounds how far the foot and the joints move, and so the links between them.
+fn levers(leg: &tca_legged_model::Leg, a: &[f64], b: &[f64]) -> Vec<f64> {
+    let joints = leg.joints();
+    let mut levers: Vec<f64> = joints
+        .iter()
+        .map(|j| match j.kind() {
+            JointKind::Prismatic { .. } => 1.0,
+            JointKind::Revolute { .. } => 0.0,
+        })
+        .collect();
+    for q in [a, b] {
+        let (Ok(frames), Ok(foot)) = (leg.joint_frames(q), leg.foot_position(q)) else {
+            return vec![leg.reach_bound(); leg.dof()];
+        };
+        for (k, j) in joints.iter().enumerate() {
+            let JointKind::Revolute { axis } = j.kind() else {
+                continue;
+            };
+            let frame = &frames[k];
+            let origin = nalgebra::Point3::from(frame.translation.vector);
+            let axis = frame.rotation * axis.into_inner();
+            let off_axis = |p: nalgebra::Point3<f64>| {
+                let d = p - origin;
+                (d - axis * d.dot(&axis)).norm()
+            };
+            let mut lever = off_axis(foot) + leg.foot_radius();
+            for later in &frames[k..] {
+                lever = lever.max(off_axis(nalgebra::Point3::from(later.translation.vector)));
+            }
+            levers[k] = levers[k].max(lever);
+        }
+    }
+    levers
+}
+
 impl LeggedSim {
     /// Moves one leg through joint-space way-points (one value per moving joint each),
     /// every joint arriving at each way-point together, each segment as fast as the
@@ -110,21 +149,17 @@ impl LeggedSim {
         }
         // Segments and their sampling.
         let step = self.params.collision_step_m;
-        let reach = l.reach_bound().max(step);
         let mut segments = Vec::with_capacity(waypoints.len());
         let mut from = self.posture[i].clone();
         let mut t0 = 0.0;
         for wp in waypoints {
+            let levers = levers(l, &from, wp);
             let mut duration: f64 = 0.0;
             let mut travel: f64 = 0.0;
-            for ((j, a), b) in l.joints().iter().zip(&from).zip(wp) {
+            for (((j, a), b), lever) in l.joints().iter().zip(&from).zip(wp).zip(&levers) {
                 let d = (b - a).abs();
                 duration = duration.max(d / j.limits().velocity);
-                let lever = match j.kind() {
-                    JointKind::Revolute { .. } => reach,
-                    JointKind::Prismatic { .. } => 1.0,
-                };
-                travel = travel.max(d * lever);
+                travel += d * lever;
             }
             let samples = ((travel / step).ceil() as usize).clamp(1, 100_000);
             segments.push(Segment {
@@ -157,7 +192,8 @@ impl LeggedSim {
                 .map(|m| m.margin_m)
                 .unwrap_or(f64::NEG_INFINITY)
         };
-        let unstable = standing < 3 || !(min_margin >= self.params.min_lift_margin_m);
+        let unstable =
+            standing < 3 || crate::sim::short_of(min_margin, self.params.min_lift_margin_m);
         if unstable && self.params.refuse_unstable_moves {
             let reason = if standing < 3 {
                 format!(
@@ -249,9 +285,13 @@ impl LeggedSim {
                     let hits = vec![(l.foot_link().to_owned(), at)];
                     return Err(self.stop_on_collision(report, i, reached, hits));
                 }
-                let com = self.com_at(&self.body, &posture);
-                let margin = tca_stability::stability_margin(&support, com);
-                if !(margin >= 0.0) {
+                // Checked before moving when unstable moves are refused.
+                let margin = if self.params.refuse_unstable_moves {
+                    0.0
+                } else {
+                    tca_stability::stability_margin(&support, self.com_at(&self.body, &posture))
+                };
+                if crate::sim::short_of(margin, 0.0) {
                     self.posture[i] = q;
                     self.advance(&mut report, seg.t0 + f * seg.duration);
                     return Err(self.finish_tip_over(report, margin));
@@ -282,7 +322,8 @@ impl LeggedSim {
             return lo;
         }
         let (mut lo, mut hi) = (lo, hi);
-        for _ in 0..40 {
+        // 2^-24 of a sample step: far below the contact tolerance.
+        for _ in 0..24 {
             let mid = 0.5 * (lo + hi);
             if self.clearance(&self.body, i, &seg.at(mid)) <= 0.0 {
                 hi = mid;

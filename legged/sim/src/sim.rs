@@ -382,7 +382,16 @@ impl LeggedSim {
     pub(crate) fn clearance(&self, body: &Isometry3<f64>, leg: usize, q: &[f64]) -> f64 {
         let l = &self.model.legs()[leg];
         match l.foot_position(q) {
-            Ok(c) => foot_clearance(&self.terrain, &(body * c), l.foot_radius()),
+            Ok(c) => {
+                let c = body * c;
+                let r = l.foot_radius();
+                // Well above everything under it: the height over that is enough.
+                let above = c.z - r - self.blocks.bound(&self.terrain, Point2::new(c.x, c.y), r);
+                if above > self.params.contact_tolerance_m {
+                    return above;
+                }
+                foot_clearance(&self.terrain, &c, r)
+            }
             Err(_) => f64::NAN,
         }
     }
@@ -399,4 +408,9 @@ impl LeggedSim {
             standing: self.standing_legs(),
         }
     }
+}
+
+/// Whether a margin falls short of a minimum (a NaN margin always does).
+pub(crate) fn short_of(margin: f64, min: f64) -> bool {
+    margin.is_nan() || margin < min
 }

@@ -12,7 +12,9 @@ use tca_legged_sim::{LeggedSim, MoveError, MoveException, SimError, SimParams, S
 use tca_robot::HeightField;
 
 /// Everything a refused move must leave as it was.
-fn snapshot(sim: &LeggedSim) -> (Isometry3<f64>, Vec<Vec<f64>>, Vec<bool>, f64, u32, u32) {
+type Snapshot = (Isometry3<f64>, Vec<Vec<f64>>, Vec<bool>, f64, u32, u32);
+
+fn snapshot(sim: &LeggedSim) -> Snapshot {
     let c = sim.counters();
     (
         sim.body(),
@@ -82,7 +84,9 @@ fn an_ambler_swing_takes_what_its_slowest_joint_needs() {
     let q = sim.posture()[0].clone();
     // Only the vertical joint moves: 0.36 m at 0.036 m/s is 10 s.
     let up = vec![q[0], q[1], q[2] - 0.36];
-    let r = sim.leg_move("left_front", &[up.clone()], false).unwrap();
+    let r = sim
+        .leg_move("left_front", std::slice::from_ref(&up), false)
+        .unwrap();
     assert!((r.duration_s - 10.0).abs() < 1e-9, "{}", r.duration_s);
     assert!(!sim.stance()[0]);
     // Shoulder 0.2 rad at 0.1 rad/s (2 s) and elbow 0.15 rad at 0.15 rad/s (1 s): 2 s.
@@ -331,7 +335,9 @@ fn bad_input_is_refused_with_clear_errors() {
     let mut sim = standing("ambler");
     let before = snapshot(&sim);
     let q = sim.posture()[0].clone();
-    let err = sim.leg_move("left_wing", &[q.clone()], false).unwrap_err();
+    let err = sim
+        .leg_move("left_wing", std::slice::from_ref(&q), false)
+        .unwrap_err();
     assert_eq!(err.kind(), MoveFailureKind::Refused);
     assert!(
         err.to_string().contains("no leg `left_wing`") && err.to_string().contains("left_front"),
