@@ -28,12 +28,12 @@
 //!
 //! # Layout
 //!
-//! - [`sim`]: [`LeggedSim`]: standing up, queries.
+//! - [`sim`] has [`LeggedSim`]: standing up, queries.
 //! - `leg_move.rs`, `body_move.rs`: [`LeggedSim::leg_move`], [`LeggedSim::body_move`].
-//! - [`params`]: [`StartPose`], [`SimParams`].
-//! - [`report`]: [`MoveReport`], [`FootEvent`], [`Counters`].
-//! - [`error`]: [`SimError`], [`MoveError`] and the bus exception it raises.
-//! - [`pose`]: conversions to and from the bus's poses and points.
+//! - [`params`] has [`StartPose`], [`SimParams`].
+//! - [`report`] has [`MoveReport`], [`FootEvent`], [`Counters`].
+//! - [`error`] has [`SimError`], [`MoveError`] and the bus exception it raises.
+//! - [`pose`] has conversions to and from the bus's poses and points.
 //! - `collide.rs`: shapes and foot spheres against the height field.
 
 mod body_move;
