@@ -16,8 +16,11 @@
 //! - [`stored`]: [`StoredSequence`], the sensor replaying images from disk, and the
 //!   `.tcarange` file format.
 //! - [`calibration`]: least-squares `scanner <- body` calibration from a target on the leg.
+//! - [`legged`]: imaging from a multi-legged robot's body: [`PoseSource`], the scanner mast
+//!   of a body of any size ([`BodyDimensions`]) and [`IsmConfig::legged_simulated`].
 //! - [`module`]: the ISM on the bus: [`connect`] with an [`IsmConfig`] answers
-//!   `acquireImage`, asking the Controller for `bodyPosition`.
+//!   `acquireImage`, asking the Controller for `bodyPosition` (single leg) or
+//!   `legged.bodyPose` (legged robots).
 //! - [`error`]: [`IsmError`] and the [`Result`] alias.
 //!
 //! Images travel as the wire type [`RangeImage`](tca_single_leg_messages::RangeImage): range
@@ -27,6 +30,7 @@
 pub mod calibration;
 pub mod error;
 pub mod frames;
+pub mod legged;
 pub mod module;
 pub mod noise;
 pub mod scanner;
@@ -40,6 +44,7 @@ pub use calibration::{
 };
 pub use error::{IsmError, Result};
 pub use frames::ImageFrames;
+pub use legged::{BodyDimensions, PoseSource, world_from_body};
 pub use module::{IsmConfig, connect};
 pub use noise::{NoiseModel, ReflectanceModel};
 pub use scanner::{SphereTarget, VirtualScanner};

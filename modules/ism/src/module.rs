@@ -1,6 +1,8 @@
 //! The ISM as a TCA module: answers `acquireImage` ([`AcquireImage`] -> [`RangeImage`]) by
-//! asking the Controller for the carriage pose (`bodyPosition`) and acquiring an image from
-//! the configured sensor of the kind asked for.
+//! asking the Controller for the pose of the body the sensors are mounted on and acquiring an
+//! image from the configured sensor of the kind asked for. The pose source is the
+//! configuration's [`PoseSource`]: the single-leg carriage (`bodyPosition`, the default) or a
+//! legged robot's body (`legged.bodyPose`, see [`crate::legged`]).
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -10,6 +12,7 @@ use tca_robot::{HeightField, LegParams};
 use tca_single_leg_messages::{AcquireImage, BodyPosition, RangeImage, SensorKind};
 
 use crate::frames::carriage_pose;
+use crate::legged::{PoseSource, world_from_body};
 use crate::scanner::VirtualScanner;
 use crate::sensor::RangeSensor;
 use crate::spec::SensorSpec;
@@ -19,6 +22,8 @@ use crate::spec::SensorSpec;
 pub struct IsmConfig {
     sensors: Vec<Box<dyn RangeSensor>>,
     simulated_time: bool,
+    pose_source: PoseSource,
+    error: Option<String>,
 }
 
 impl std::fmt::Debug for IsmConfig {
@@ -33,6 +38,7 @@ impl std::fmt::Debug for IsmConfig {
                     .collect::<Vec<_>>(),
             )
             .field("simulated_time", &self.simulated_time)
+            .field("pose_source", &self.pose_source)
             .finish()
     }
 }
@@ -71,6 +77,23 @@ impl IsmConfig {
         self
     }
 
+    /// Where the body pose comes from at every image (default: the single-leg carriage).
+    pub fn with_pose_source(mut self, source: PoseSource) -> Self {
+        self.pose_source = source;
+        self
+    }
+
+    /// The pose source.
+    pub fn pose_source(&self) -> PoseSource {
+        self.pose_source
+    }
+
+    /// Marks the configuration as bad: [`connect`] refuses it with this reason.
+    pub(crate) fn with_error(mut self, reason: String) -> Self {
+        self.error = Some(reason);
+        self
+    }
+
     /// The kinds of sensor configured.
     pub fn kinds(&self) -> Vec<SensorKind> {
         self.sensors.iter().map(|s| s.spec().kind).collect()
@@ -85,6 +108,10 @@ pub const FRAME_TIME: std::time::Duration = std::time::Duration::from_millis(500
 /// Connects the ISM module (`"ism"`) and serves `acquireImage`. Two sensors of one kind are a
 /// configuration error.
 pub async fn connect(connector: &Connector, config: IsmConfig) -> Result<Module, ModuleError> {
+    if let Some(reason) = config.error {
+        return Err(ModuleError::Config(reason));
+    }
+    let source = config.pose_source;
     let mut sensors: HashMap<SensorKind, SharedSensor> = HashMap::new();
     for sensor in config.sensors {
         let kind = sensor.spec().kind;
@@ -99,7 +126,7 @@ pub async fn connect(connector: &Connector, config: IsmConfig) -> Result<Module,
         .simulated_time(config.simulated_time)
         .handle(move |ctx, request: AcquireImage| {
             let sensors = sensors.clone();
-            async move { acquire(&ctx, &sensors, request.sensor).await }
+            async move { acquire(&ctx, &sensors, request.sensor, source).await }
         })
         .connect(connector)
         .await
@@ -109,21 +136,49 @@ async fn acquire(
     ctx: &tca_module::Context,
     sensors: &HashMap<SensorKind, SharedSensor>,
     kind: SensorKind,
+    source: PoseSource,
 ) -> Result<RangeImage, HandlerError> {
     let sensor = sensors
         .get(&kind)
         .cloned()
         .ok_or_else(|| HandlerError::from(crate::IsmError::NoSuchSensor(kind)))?;
-    let pose = carriage_pose(&ctx.query(&BodyPosition).await?);
-    let image = tokio::task::spawn_blocking(move || {
+    let image = match source {
+        PoseSource::Carriage => {
+            let pose = carriage_pose(&ctx.query(&BodyPosition).await?);
+            let image = run(sensor, move |s| s.acquire(&pose)).await?;
+            tracing::debug!(sensor = ?kind, sequence = image.sequence, y_m = pose.y_m, "image acquired");
+            image
+        }
+        PoseSource::LeggedBody => {
+            let pose = ctx.query(&tca_legged_messages::BodyPose).await?;
+            let body = world_from_body(&pose);
+            let image = run(sensor, move |s| s.acquire_from_body(&body)).await?;
+            tracing::debug!(
+                sensor = ?kind,
+                sequence = image.sequence,
+                x_m = pose.x_m,
+                y_m = pose.y_m,
+                yaw_rad = pose.yaw_rad,
+                "image acquired from the legged body"
+            );
+            image
+        }
+    };
+    ctx.spend(FRAME_TIME);
+    Ok(image)
+}
+
+/// Runs an acquisition on a blocking thread.
+async fn run(
+    sensor: SharedSensor,
+    f: impl FnOnce(&mut dyn RangeSensor) -> crate::Result<RangeImage> + Send + 'static,
+) -> Result<RangeImage, HandlerError> {
+    tokio::task::spawn_blocking(move || {
         let mut sensor = sensor.lock().map_err(|_| {
             HandlerError::new("the sensor's state was poisoned by an earlier panic")
         })?;
-        sensor.acquire(&pose).map_err(HandlerError::from)
+        f(sensor.as_mut()).map_err(HandlerError::from)
     })
     .await
-    .map_err(|e| HandlerError::new(format!("image acquisition did not finish: {e}")))??;
-    tracing::debug!(sensor = ?kind, sequence = image.sequence, y_m = pose.y_m, "image acquired");
-    ctx.spend(FRAME_TIME);
-    Ok(image)
+    .map_err(|e| HandlerError::new(format!("image acquisition did not finish: {e}")))?
 }

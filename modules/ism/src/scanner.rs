@@ -16,7 +16,7 @@ use tca_robot::{CarriagePose, HeightField, LegParams};
 use tca_single_leg_messages::RangeImage;
 
 use crate::error::{IsmError, Result};
-use crate::frames::{body_from_global, to_wire};
+use crate::frames::to_wire;
 use crate::noise::{NoiseModel, Normal, ReflectanceModel, row_rng};
 use crate::sensor::RangeSensor;
 use crate::spec::{PixelDirections, SensorSpec};
@@ -87,6 +87,21 @@ impl VirtualScanner {
             sequence: 0,
             targets: Vec::new(),
         }
+    }
+
+    /// A scanner of `spec` mounted on a body (a legged robot's) by `body_from_scanner`,
+    /// tagging its images with the nominal calibration (`scanner <- body`, the mount's
+    /// inverse), with its sensor's default noise, seed 0 and as many threads as the machine
+    /// has cores. Image it with [`VirtualScanner::cast_from_body`] or through
+    /// [`RangeSensor::acquire_from_body`].
+    pub fn on_body(
+        spec: SensorSpec,
+        terrain: Arc<HeightField>,
+        body_from_scanner: Isometry3<f64>,
+    ) -> Self {
+        Self::new(spec, terrain, &LegParams::default())
+            .with_true_mount(body_from_scanner)
+            .with_calibration(body_from_scanner.inverse())
     }
 
     /// Uses this noise model.
@@ -180,15 +195,42 @@ impl VirtualScanner {
                 "the carriage pose {pose:?} is not finite; the Controller's body position is bad"
             )));
         }
+        self.cast_from(&pose.world_from_carriage(&self.carriage), sequence)
+    }
+
+    /// The image the scanner takes with its body (the frame it is mounted on) at
+    /// `world_from_body`, any position and orientation, with sequence number `sequence`:
+    /// rays start from `world_from_body * mount` and the image's `body <- global` transform
+    /// is `world_from_body`'s inverse. This is how a scanner on a legged robot's body images
+    /// (see [`crate::legged`]); deterministic like [`VirtualScanner::cast`].
+    pub fn cast_from_body(
+        &self,
+        world_from_body: &Isometry3<f64>,
+        sequence: u64,
+    ) -> Result<RangeImage> {
+        let finite = world_from_body
+            .to_homogeneous()
+            .iter()
+            .all(|v| v.is_finite());
+        if !finite {
+            return Err(IsmError::Config(format!(
+                "the body pose {world_from_body:?} is not finite; the Controller's body pose \
+                 is bad"
+            )));
+        }
+        self.cast_from(world_from_body, sequence)
+    }
+
+    /// Casts from the body at `world_from_body` (checked finite by the callers).
+    fn cast_from(&self, world_from_body: &Isometry3<f64>, sequence: u64) -> Result<RangeImage> {
         if !self.noise.is_valid() {
             return Err(IsmError::Config(format!(
                 "noise parameters must be finite and non-negative, got {:?}",
                 self.noise
             )));
         }
-        let world_from_locus = pose.world_from_carriage(&self.carriage)
-            * self.true_carriage_from_scanner
-            * self.locus_from_scanner.inverse();
+        let world_from_locus =
+            world_from_body * self.true_carriage_from_scanner * self.locus_from_scanner.inverse();
         let n = self.spec.pixel_count();
         let width = self.spec.width_px as usize;
         let mut range_counts = vec![0u16; n];
@@ -232,7 +274,7 @@ impl VirtualScanner {
             elevation_fov_rad: self.spec.elevation_fov_rad,
             locus_from_scanner: to_wire(&self.locus_from_scanner),
             scanner_from_body: to_wire(&self.scanner_from_body),
-            body_from_global: to_wire(&body_from_global(&self.carriage, pose)),
+            body_from_global: to_wire(&world_from_body.inverse()),
             sequence,
         })
     }
@@ -313,6 +355,12 @@ impl RangeSensor for VirtualScanner {
 
     fn acquire(&mut self, pose: &CarriagePose) -> Result<RangeImage> {
         let image = self.cast(pose, self.sequence)?;
+        self.sequence += 1;
+        Ok(image)
+    }
+
+    fn acquire_from_body(&mut self, world_from_body: &Isometry3<f64>) -> Result<RangeImage> {
+        let image = self.cast_from_body(world_from_body, self.sequence)?;
         self.sequence += 1;
         Ok(image)
     }

@@ -236,6 +236,13 @@ impl RangeSensor for StoredSequence {
         &self.spec
     }
 
+    fn acquire_from_body(
+        &mut self,
+        _world_from_body: &nalgebra::Isometry3<f64>,
+    ) -> Result<RangeImage> {
+        self.acquire(&CarriagePose::level(0.0))
+    }
+
     fn acquire(&mut self, _pose: &CarriagePose) -> Result<RangeImage> {
         if self.next >= self.files.len() {
             if !self.looping {
