@@ -161,9 +161,14 @@ impl LeggedSim {
             if let Some((link, at)) = hits.first().cloned() {
                 self.counters.collisions += hits.len() as u32;
                 self.last = Some(report);
+                let leg = model
+                    .link(&link)
+                    .and_then(|l| l.leg())
+                    .and_then(|i| model.legs().get(i))
+                    .map(|l| l.name().to_owned());
                 return Err(MoveError::Collision {
                     command: CMD,
-                    leg: None,
+                    leg,
                     link,
                     at,
                 });
