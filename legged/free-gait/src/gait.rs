@@ -23,7 +23,7 @@ const WORKSPACE_SAMPLES: usize = 8192;
 /// Footholds fully evaluated per leg and body target.
 const FOOTHOLDS_EVALUATED: usize = 12;
 /// Candidates looked at per leg and body target before giving up on finding more.
-const CANDIDATES_TRIED: usize = 400;
+const CANDIDATES_TRIED: usize = 1500;
 /// Swings planned (the best footholds first) before giving up on a body target.
 const SWINGS_TRIED: usize = 12;
 /// Fractions of the full body move tested for each leg's reach.
@@ -613,7 +613,6 @@ impl FreeGait {
         direction: Vector2<f64>,
         body_progress: f64,
     ) -> Result<(Swing, Foothold), String> {
-        let footholds = self.footholds(state, terrain, body, leg, direction)?;
         let others: Vec<usize> = state
             .stance_legs()
             .into_iter()
@@ -622,20 +621,37 @@ impl FreeGait {
         let polygon = polygon_of(others.iter().map(|&i| state.legs[i].foot));
         let start = body.posture[leg].clone();
         let mut why = Vec::new();
-        let mut tried = 0;
-        for foothold in footholds {
-            if body_progress + foothold.progress < self.params.min_progress_m {
-                why.push("no foothold ahead of it".to_string());
-                continue;
+        // The best-ranked footholds first; if none of them is ahead, the best of those
+        // that are.
+        let needed = self.params.min_progress_m - body_progress;
+        for filter in [f64::NEG_INFINITY, needed] {
+            let footholds = match self.footholds(state, terrain, body, leg, direction, filter) {
+                Ok(f) => f,
+                Err(e) => {
+                    why.push(e);
+                    continue;
+                }
+            };
+            let mut tried = 0;
+            let mut ahead = false;
+            for foothold in footholds {
+                if body_progress + foothold.progress < self.params.min_progress_m {
+                    continue;
+                }
+                ahead = true;
+                tried += 1;
+                if tried > SWINGS_TRIED {
+                    break;
+                }
+                match self.swing(terrain, &body.target, &body.posture, leg, &start, &foothold, &polygon, true) {
+                    Ok(swing) => return Ok((swing, foothold)),
+                    Err(e) => why.push(e),
+                }
             }
-            tried += 1;
-            if tried > SWINGS_TRIED {
+            if ahead {
                 break;
             }
-            match self.swing(terrain, &body.target, &body.posture, leg, &start, &foothold, &polygon, true) {
-                Ok(swing) => return Ok((swing, foothold)),
-                Err(e) => why.push(e),
-            }
+            why.push("no foothold ahead of it".to_string());
         }
         why.dedup();
         Err(if why.is_empty() {
@@ -653,6 +669,7 @@ impl FreeGait {
         body: &BodyMove,
         leg: usize,
         direction: Vector2<f64>,
+        needed: f64,
     ) -> Result<Vec<Foothold>, String> {
         let info = &self.legs[leg];
         let p = &self.params;
@@ -686,9 +703,24 @@ impl FreeGait {
             .map(|i| state.legs[i].foot)
             .collect();
         let spacing = 2.0 * info.radius + 2.0 * p.clearance_m;
+        // Feet of the legs ahead of this one on its side (along the travel direction): its
+        // foot does not pass them, so that no leg is left behind another.
+        let side = |v: Point3<f64>| (d.x * v.y - d.y * v.x).signum();
+        let rank = |v: Point3<f64>| v.x * d.x + v.y * d.y;
+        let ahead_of_it: Vec<Point3<f64>> = state
+            .stance_legs()
+            .into_iter()
+            .filter(|&i| {
+                i != leg
+                    && side(self.legs[i].neutral) == side(info.neutral)
+                    && rank(self.legs[i].neutral) > rank(info.neutral) + 1e-6
+            })
+            .map(|i| state.legs[i].foot)
+            .collect();
         let old = state.legs[leg].foot;
         let (mut unknown, mut forbidden, mut unreachable, mut crowded, mut unstable, mut trapping) =
             (0, 0, 0, 0, 0, 0);
+        let mut pits = 0;
         let mut found = Vec::new();
         for (pre, candidate) in ranked.into_iter().take(CANDIDATES_TRIED) {
             if found.len() >= FOOTHOLDS_EVALUATED {
@@ -697,6 +729,15 @@ impl FreeGait {
             let c = candidate.at;
             let w = body.target * Point3::new(c.x, c.y, info.neutral.z);
             let xy = Point2::new(w.x, w.y);
+            if (xy.x - old.x) * direction.x + (xy.y - old.y) * direction.y < needed {
+                continue;
+            }
+            if ahead_of_it.iter().any(|f| {
+                (xy.x - f.x) * direction.x + (xy.y - f.y) * direction.y > -0.5 * spacing
+            }) {
+                crowded += 1;
+                continue;
+            }
             if others.iter().any(|o| (Point2::new(o.x, o.y) - xy).norm() < spacing) {
                 crowded += 1;
                 continue;
@@ -726,6 +767,19 @@ impl FreeGait {
                 unreachable += 1;
                 continue;
             };
+            // A foot set in a hollow must be able to climb out of it again.
+            let rim = terrain
+                .max_height_in_disc(xy, 3.0 * info.radius + p.foothold_spacing_m)
+                .unwrap_or(f64::INFINITY);
+            let pit = rim - (centre.z - info.radius);
+            if pit > 2.0 * p.clearance_m
+                && self
+                    .raise(&body.target, leg, &joints, pit + 2.0 * p.clearance_m)
+                    .is_none()
+            {
+                pits += 1;
+                continue;
+            }
             let mut posture = body.posture.clone();
             posture[leg] = joints.clone();
             let contact = contact_of_centre(&centre, info.radius);
@@ -768,7 +822,8 @@ impl FreeGait {
         if found.is_empty() {
             return Err(format!(
                 "none of its candidate footholds will do ({unknown} on unknown ground, \
-                 {forbidden} on forbidden ground, {unreachable} out of reach, {crowded} too near \
+                 {forbidden} on forbidden ground, {unreachable} out of reach, {pits} in a hollow it could \
+                 not climb out of, {crowded} too near \
                  another foot, {unstable} too little margin, {trapping} would leave another leg \
                  unable to lift)"
             ));
@@ -852,8 +907,14 @@ impl FreeGait {
         let mut why = String::from("no lift height clears the terrain");
         for level in 0..6 {
             let z = top + level as f64 * 0.15 * p.scale;
-            let Some(lifted) = self.raise(body, leg, start, z - start_centre.z) else {
-                why = format!("leg `{name}` cannot lift {:.2} m", z - start_centre.z);
+            // Lift to the travel height, or when the leg cannot, a little: the travel then
+            // climbs toward the height over the foothold.
+            let rise = z - start_centre.z;
+            let Some(lifted) = self
+                .raise(body, leg, start, rise)
+                .or_else(|| self.raise(body, leg, start, (3.0 * p.clearance_m).min(rise)))
+            else {
+                why = format!("leg `{name}` cannot lift {rise:.2} m");
                 break;
             };
             let Some(high) = self.raise(body, leg, &foothold.joints, z - foothold.centre.z) else {
@@ -1015,7 +1076,7 @@ impl FreeGait {
         };
         let name = self.legs[leg].name.clone();
         let footholds = self
-            .footholds(state, terrain, &body, leg, direction)
+            .footholds(state, terrain, &body, leg, direction, f64::NEG_INFINITY)
             .map_err(|reason| GaitError::NoFoothold {
                 leg: name.clone(),
                 reason,

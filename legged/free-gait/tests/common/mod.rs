@@ -287,6 +287,17 @@ pub fn walk(
             }
             Err(GaitError::GoalReached { .. }) => break,
             Err(e) => {
+                if std::env::var_os("GAIT_DEBUG").is_some() {
+                    let t = state.body.translation.vector;
+                    eprintln!("{robot}: stuck with the body at ({:.2}, {:.2}, {:.2})", t.x, t.y, t.z);
+                    for (i, l) in state.legs.iter().enumerate() {
+                        let local = state.body.inverse() * l.foot;
+                        eprintln!(
+                            "  leg {i}: foot ({:.2}, {:.2}, {:.2}) body frame ({:.2}, {:.2}, {:.2}) joints {:.2?}",
+                            l.foot.x, l.foot.y, l.foot.z, local.x, local.y, local.z, l.joints
+                        );
+                    }
+                }
                 error = Some(e);
                 break;
             }
