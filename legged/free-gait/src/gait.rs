@@ -910,10 +910,23 @@ impl FreeGait {
             // Lift to the travel height, or when the leg cannot, a little: the travel then
             // climbs toward the height over the foothold.
             let rise = z - start_centre.z;
-            let Some(lifted) = self
-                .raise(body, leg, start, rise)
-                .or_else(|| self.raise(body, leg, start, (3.0 * p.clearance_m).min(rise)))
-            else {
+            let Some(lifted) = self.raise(body, leg, start, rise).or_else(|| {
+                // As high as the leg can: bisect between a small lift and the full one.
+                let small = (3.0 * p.clearance_m).min(rise);
+                let mut best = self.raise(body, leg, start, small)?;
+                let (mut lo, mut hi) = (small, rise);
+                for _ in 0..8 {
+                    let mid = 0.5 * (lo + hi);
+                    match self.raise(body, leg, start, mid) {
+                        Some(q) => {
+                            best = q;
+                            lo = mid;
+                        }
+                        None => hi = mid,
+                    }
+                }
+                Some(best)
+            }) else {
                 why = format!("leg `{name}` cannot lift {rise:.2} m");
                 break;
             };

@@ -483,7 +483,7 @@ pub mod hexapod_courses {
         make(|_, _| 0.0)
     }
 
-    /// Bumps of up to about 4 cm.
+    /// Waves of up to about 4 cm.
     pub fn rough() -> Arc<HeightField> {
         make(with_flat_start(0.3, 0.0, 0.35, 0.15, |x, y| 0.04 * noise(x * 10.0, y * 10.0, 2.0)))
     }
