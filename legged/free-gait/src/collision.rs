@@ -78,6 +78,7 @@ impl Probes {
 
     /// Checks the shapes of the links `select` accepts (by leg, `None` for the body) at a
     /// body pose and posture. Unknown ground takes `fallback`'s height for the shape's leg.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn check(
         &self,
         model: &RobotModel,
@@ -113,8 +114,7 @@ impl Probes {
                 {
                     continue;
                 }
-                let ground = match view.max_height_in_disc(Point2::new(w.x, w.y), probe.spacing)
-                {
+                let ground = match view.max_height_in_disc(Point2::new(w.x, w.y), probe.spacing) {
                     Some(h) => h,
                     None => match fallback_height {
                         Some(h) => h,
@@ -235,7 +235,12 @@ mod tests {
 
     #[test]
     fn surface_points_lie_on_the_shapes() {
-        let (pts, s) = surface_points(&Shape::Box { size: Vector3::new(1.0, 2.0, 0.5) }, 0.1);
+        let (pts, s) = surface_points(
+            &Shape::Box {
+                size: Vector3::new(1.0, 2.0, 0.5),
+            },
+            0.1,
+        );
         assert!(s <= 0.1 + 1e-9);
         assert!(pts.iter().all(|p| {
             let on = (p.x.abs() - 0.5).abs() < 1e-9
@@ -243,8 +248,17 @@ mod tests {
                 || (p.z.abs() - 0.25).abs() < 1e-9;
             on && p.x.abs() <= 0.5 + 1e-9 && p.y.abs() <= 1.0 + 1e-9 && p.z.abs() <= 0.25 + 1e-9
         }));
-        let (pts, _) = surface_points(&Shape::Cylinder { radius: 0.1, length: 3.6 }, 0.1);
-        assert!(pts.iter().all(|p| p.z.abs() <= 1.8 + 1e-9 && p.x.hypot(p.y) <= 0.1 + 1e-9));
+        let (pts, _) = surface_points(
+            &Shape::Cylinder {
+                radius: 0.1,
+                length: 3.6,
+            },
+            0.1,
+        );
+        assert!(
+            pts.iter()
+                .all(|p| p.z.abs() <= 1.8 + 1e-9 && p.x.hypot(p.y) <= 0.1 + 1e-9)
+        );
         assert!(pts.iter().any(|p| (p.z + 1.8).abs() < 1e-9));
     }
 }

@@ -29,6 +29,12 @@ const SWINGS_TRIED: usize = 12;
 /// Fractions of the full body move tested for each leg's reach.
 const REACH_FRACTIONS: usize = 6;
 
+/// Body poses along a move and the posture at each.
+type Samples = Vec<(Isometry3<f64>, Vec<Vec<f64>>)>;
+
+/// Where a lowering foot first touches: the leg's joints and the foot-sphere centre.
+type Contact = (Vec<f64>, Point3<f64>);
+
 /// What the gait knows of one leg, computed once.
 #[derive(Debug, Clone)]
 struct LegInfo {
@@ -98,7 +104,6 @@ pub struct FreeGait {
     params: GaitParams,
     legs: Vec<LegInfo>,
     probes: Probes,
-    height: f64,
 }
 
 impl LegInfo {
@@ -124,16 +129,22 @@ impl FreeGait {
                     .foot_position(&leg.neutral())
                     .unwrap_or_else(|_| Point3::origin());
                 let samples = leg.workspace_samples(WORKSPACE_SAMPLES);
-                let (lo, hi) = samples.iter().fold(
-                    (f64::INFINITY, f64::NEG_INFINITY),
-                    |(lo, hi), p| (lo.min(p.z), hi.max(p.z)),
-                );
+                let (lo, hi) = samples
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                        (lo.min(p.z), hi.max(p.z))
+                    });
                 let cell = params.foothold_spacing_m.max(1e-4);
                 let mut cells: Vec<((i64, i64), f64)> = samples
                     .iter()
-                    .map(|p| (((p.x / cell).round() as i64, (p.y / cell).round() as i64), p.z))
+                    .map(|p| {
+                        (
+                            ((p.x / cell).round() as i64, (p.y / cell).round() as i64),
+                            p.z,
+                        )
+                    })
                     .collect();
-                cells.sort_unstable_by(|a, b| a.0.cmp(&b.0));
+                cells.sort_unstable_by_key(|a| a.0);
                 let slack = 0.1 * (hi - lo).max(1e-6);
                 let mut candidates: Vec<Candidate> = Vec::new();
                 for ((i, j), z) in cells {
@@ -152,15 +163,26 @@ impl FreeGait {
                 let index = candidates
                     .iter()
                     .enumerate()
-                    .map(|(k, c)| (((c.at.x / cell).round() as i64, (c.at.y / cell).round() as i64), k))
+                    .map(|(k, c)| {
+                        (
+                            (
+                                (c.at.x / cell).round() as i64,
+                                (c.at.y / cell).round() as i64,
+                            ),
+                            k,
+                        )
+                    })
                     .collect();
                 let slide = leg.joint_frames(&leg.neutral()).ok().and_then(|frames| {
-                    leg.joints().iter().enumerate().position(|(k, j)| match j.kind() {
-                        JointKind::Prismatic { axis } => {
-                            (frames[k].rotation * axis.into_inner()).z.abs() > 0.99
-                        }
-                        JointKind::Revolute { .. } => false,
-                    })
+                    leg.joints()
+                        .iter()
+                        .enumerate()
+                        .position(|(k, j)| match j.kind() {
+                            JointKind::Prismatic { axis } => {
+                                (frames[k].rotation * axis.into_inner()).z.abs() > 0.99
+                            }
+                            JointKind::Revolute { .. } => false,
+                        })
                 });
                 LegInfo {
                     name: leg.name().to_string(),
@@ -174,13 +196,11 @@ impl FreeGait {
             })
             .collect();
         let probes = Probes::new(&model, params.sample_m * 2.0);
-        let height = model.neutral_height();
         FreeGait {
             model,
             params,
             legs,
             probes,
-            height,
         }
     }
 
@@ -261,7 +281,9 @@ impl FreeGait {
             ));
         }
         let t = state.body.translation.vector;
-        if !(t.iter().all(|v| v.is_finite()) && state.body.rotation.coords.iter().all(|v| v.is_finite())) {
+        if !(t.iter().all(|v| v.is_finite())
+            && state.body.rotation.coords.iter().all(|v| v.is_finite()))
+        {
             return bad("the body pose is not finite".into());
         }
         for (leg, l) in self.model.legs().iter().zip(&state.legs) {
@@ -276,7 +298,13 @@ impl FreeGait {
     }
 
     /// Inverse kinematics of a leg toward a body-frame foot-sphere centre.
-    fn ik(&self, leg: usize, target: &Point3<f64>, initial: &[f64], random_starts: usize) -> Option<Vec<f64>> {
+    fn ik(
+        &self,
+        leg: usize,
+        target: &Point3<f64>,
+        initial: &[f64],
+        random_starts: usize,
+    ) -> Option<Vec<f64>> {
         let options = IkOptions {
             random_starts,
             initial: Some(initial.to_vec()),
@@ -305,7 +333,7 @@ impl FreeGait {
         to: &Isometry3<f64>,
         posture: &[Vec<f64>],
         stance: &[usize],
-    ) -> Result<Vec<(Isometry3<f64>, Vec<Vec<f64>>)>, String> {
+    ) -> Result<Samples, String> {
         let n = self.move_samples(from, to);
         let mut q = posture.to_vec();
         let mut out = Vec::with_capacity(n);
@@ -441,7 +469,10 @@ impl FreeGait {
         let turn = error.clamp(-p.max_turn_rad, p.max_turn_rad);
         let advance = p.max_body_step_m.min(distance) * error.cos().max(0.0);
         let heading = yaw + turn;
-        let (x, y) = (here.x + direction.x * advance, here.y + direction.y * advance);
+        let (x, y) = (
+            here.x + direction.x * advance,
+            here.y + direction.y * advance,
+        );
         let rotation = UnitQuaternion::from_euler_angles(0.0, 0.0, heading);
         let z = self.body_height(state, &stance, x, y, &rotation);
         let full = Isometry3::from_parts(Translation3::new(x, y, z), rotation);
@@ -518,7 +549,12 @@ impl FreeGait {
                 let mut candidates = vec![body];
                 // When lifting the leg would leave too little margin, shift the body toward
                 // the middle of the feet that stay.
-                let lift_margin = self.margin_of(state, &candidates[0].target, &candidates[0].posture, Some(leg));
+                let lift_margin = self.margin_of(
+                    state,
+                    &candidates[0].target,
+                    &candidates[0].posture,
+                    Some(leg),
+                );
                 if lift_margin < p.min_margin_m {
                     why.push(format!(
                         "lifting it after a {:.2} m body move leaves a margin of {lift_margin:.3} m",
@@ -643,7 +679,16 @@ impl FreeGait {
                 if tried > SWINGS_TRIED {
                     break;
                 }
-                match self.swing(terrain, &body.target, &body.posture, leg, &start, &foothold, &polygon, true) {
+                match self.swing(
+                    terrain,
+                    &body.target,
+                    &body.posture,
+                    leg,
+                    &start,
+                    &foothold,
+                    &polygon,
+                    true,
+                ) {
                     Ok(swing) => return Ok((swing, foothold)),
                     Err(e) => why.push(e),
                 }
@@ -676,7 +721,11 @@ impl FreeGait {
         let inverse = body.target.inverse();
         let d3 = inverse.rotation * Vector3::new(direction.x, direction.y, 0.0);
         let d = Vector2::new(d3.x, d3.y);
-        let d = if d.norm() > 1e-9 { d.normalize() } else { Vector2::x() };
+        let d = if d.norm() > 1e-9 {
+            d.normalize()
+        } else {
+            Vector2::x()
+        };
         let n = Point2::new(info.neutral.x, info.neutral.y);
         let ahead = info
             .candidates
@@ -732,13 +781,17 @@ impl FreeGait {
             if (xy.x - old.x) * direction.x + (xy.y - old.y) * direction.y < needed {
                 continue;
             }
-            if ahead_of_it.iter().any(|f| {
-                (xy.x - f.x) * direction.x + (xy.y - f.y) * direction.y > -0.5 * spacing
-            }) {
+            if ahead_of_it
+                .iter()
+                .any(|f| (xy.x - f.x) * direction.x + (xy.y - f.y) * direction.y > -0.5 * spacing)
+            {
                 crowded += 1;
                 continue;
             }
-            if others.iter().any(|o| (Point2::new(o.x, o.y) - xy).norm() < spacing) {
+            if others
+                .iter()
+                .any(|o| (Point2::new(o.x, o.y) - xy).norm() < spacing)
+            {
                 crowded += 1;
                 continue;
             }
@@ -857,7 +910,11 @@ impl FreeGait {
     fn segment_samples(&self, leg: usize, a: &[f64], b: &[f64]) -> usize {
         let l = &self.model.legs()[leg];
         let mid: Vec<f64> = a.iter().zip(b).map(|(x, y)| 0.5 * (x + y)).collect();
-        let (Ok(fa), Ok(fm), Ok(fb)) = (l.foot_position(a), l.foot_position(&mid), l.foot_position(b)) else {
+        let (Ok(fa), Ok(fm), Ok(fb)) = (
+            l.foot_position(a),
+            l.foot_position(&mid),
+            l.foot_position(b),
+        ) else {
             return 1;
         };
         let travel = (fm - fa).norm() + (fb - fm).norm();
@@ -894,7 +951,10 @@ impl FreeGait {
             .ok_or_else(|| format!("leg `{name}` cannot reach below its foothold"))?;
         // The height the foot must travel at: above both ends and the ground between.
         let mut top = start_centre.z.max(foothold.centre.z) + 2.0 * p.clearance_m;
-        let span = Point2::new(foothold.centre.x - start_centre.x, foothold.centre.y - start_centre.y);
+        let span = Point2::new(
+            foothold.centre.x - start_centre.x,
+            foothold.centre.y - start_centre.y,
+        );
         let steps = ((span.coords.norm() / p.sample_m).ceil() as usize).max(1);
         for k in 0..=steps {
             let t = k as f64 / steps as f64;
@@ -931,15 +991,53 @@ impl FreeGait {
                 break;
             };
             let Some(high) = self.raise(body, leg, &foothold.joints, z - foothold.centre.z) else {
-                why = format!("leg `{name}` cannot reach {:.2} m above its foothold", z - foothold.centre.z);
+                why = format!(
+                    "leg `{name}` cannot reach {:.2} m above its foothold",
+                    z - foothold.centre.z
+                );
                 break;
             };
             let mut com_path = Vec::new();
-            let first = if on_ground { Segment::Lift } else { Segment::Travel };
+            let first = if on_ground {
+                Segment::Lift
+            } else {
+                Segment::Travel
+            };
             let result = self
-                .segment(terrain, body, posture, leg, start, &lifted, first, &mut com_path)
-                .and_then(|_| self.segment(terrain, body, posture, leg, &lifted, &high, Segment::Travel, &mut com_path))
-                .and_then(|_| self.segment(terrain, body, posture, leg, &high, &below, Segment::Lower, &mut com_path));
+                .segment(
+                    terrain,
+                    body,
+                    posture,
+                    leg,
+                    start,
+                    &lifted,
+                    first,
+                    &mut com_path,
+                )
+                .and_then(|_| {
+                    self.segment(
+                        terrain,
+                        body,
+                        posture,
+                        leg,
+                        &lifted,
+                        &high,
+                        Segment::Travel,
+                        &mut com_path,
+                    )
+                })
+                .and_then(|_| {
+                    self.segment(
+                        terrain,
+                        body,
+                        posture,
+                        leg,
+                        &high,
+                        &below,
+                        Segment::Lower,
+                        &mut com_path,
+                    )
+                });
             let contact = match result {
                 Ok(Some(c)) => c,
                 Ok(None) => {
@@ -966,7 +1064,10 @@ impl FreeGait {
             }
             let mut waypoints = vec![lifted, high, below];
             waypoints.dedup_by(|a, b| a.iter().zip(b.iter()).all(|(x, y)| (x - y).abs() < 1e-9));
-            if waypoints.first().is_some_and(|w| w.iter().zip(start).all(|(x, y)| (x - y).abs() < 1e-9)) {
+            if waypoints
+                .first()
+                .is_some_and(|w| w.iter().zip(start).all(|(x, y)| (x - y).abs() < 1e-9))
+            {
                 waypoints.remove(0);
             }
             return Ok(Swing {
@@ -992,14 +1093,13 @@ impl FreeGait {
         b: &[f64],
         kind: Segment,
         com_path: &mut Vec<Point3<f64>>,
-    ) -> Result<Option<(Vec<f64>, Point3<f64>)>, String> {
+    ) -> Result<Option<Contact>, String> {
         let p = &self.params;
         let info = &self.legs[leg];
         let r = info.radius;
         let n = self.segment_samples(leg, a, b);
         let at = |t: f64| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x + (y - x) * t).collect() };
         let mut q = posture.to_vec();
-        let mut previous = (at(0.0), f64::NAN);
         let start = if kind == Segment::Lift { 0 } else { 1 };
         for k in start..=n {
             let t = k as f64 / n as f64;
@@ -1016,7 +1116,10 @@ impl FreeGait {
                 }
                 Segment::Travel => match clearance {
                     None => {
-                        return Err(format!("the ground under leg `{}`'s swing is unknown", info.name));
+                        return Err(format!(
+                            "the ground under leg `{}`'s swing is unknown",
+                            info.name
+                        ));
                     }
                     Some(c) if c < p.clearance_m * 0.5 => {
                         return Err(format!(
@@ -1028,7 +1131,10 @@ impl FreeGait {
                 },
                 Segment::Lower => {
                     let Some(c) = clearance else {
-                        return Err(format!("the ground under leg `{}`'s foothold is unknown", info.name));
+                        return Err(format!(
+                            "the ground under leg `{}`'s foothold is unknown",
+                            info.name
+                        ));
                     };
                     if c <= 0.0 {
                         // Contact between the previous sample and this one: bisect.
@@ -1047,7 +1153,6 @@ impl FreeGait {
                         com_path.extend(com_world(&self.model, body, &q));
                         return Ok(Some((joints, centre)));
                     }
-                    previous = (joints.clone(), c);
                 }
             }
             q[leg] = joints;
@@ -1061,7 +1166,11 @@ impl FreeGait {
                     body,
                     &q,
                     &|l| l == own,
-                    if kind == Segment::Travel { p.clearance_m } else { p.clearance_m * 0.5 },
+                    if kind == Segment::Travel {
+                        p.clearance_m
+                    } else {
+                        p.clearance_m * 0.5
+                    },
                     &fallback,
                 )
                 .map_err(|h| match (&h, kind) {
@@ -1069,7 +1178,6 @@ impl FreeGait {
                     _ => format!("swinging leg `{}`, {}", info.name, h.describe()),
                 })?;
         }
-        let _ = previous;
         Ok(None)
     }
 
@@ -1097,7 +1205,16 @@ impl FreeGait {
         let polygon = polygon_of(state.stance_legs().into_iter().map(|i| state.legs[i].foot));
         let mut why = Vec::new();
         for foothold in footholds.into_iter().take(SWINGS_TRIED) {
-            match self.swing(terrain, &state.body, &posture, leg, &posture[leg], &foothold, &polygon, false) {
+            match self.swing(
+                terrain,
+                &state.body,
+                &posture,
+                leg,
+                &posture[leg],
+                &foothold,
+                &polygon,
+                false,
+            ) {
                 Ok(swing) => return Ok(self.assemble(state, &body, leg, swing, foothold)),
                 Err(e) => why.push(e),
             }
@@ -1168,21 +1285,28 @@ pub fn stand(
     y: f64,
     yaw: f64,
 ) -> Result<GaitState, GaitError> {
-    let height = model.neutral_height();
     let rotation = UnitQuaternion::from_euler_angles(0.0, 0.0, yaw);
     let mut rests = Vec::new();
     for leg in model.legs() {
         let n = leg
             .foot_position(&leg.neutral())
-            .map_err(|e| GaitError::BadState { reason: e.to_string() })?;
+            .map_err(|e| GaitError::BadState {
+                reason: e.to_string(),
+            })?;
         let w = Point2::new(x, y) + (rotation * Vector3::new(n.x, n.y, 0.0)).xy();
-        let rest = rest_height(terrain, w, leg.foot_radius()).ok_or_else(|| GaitError::UnknownTerrain {
-            what: format!("under leg `{}` standing at ({:.2}, {:.2})", leg.name(), w.x, w.y),
+        let rest = rest_height(terrain, w, leg.foot_radius()).ok_or_else(|| {
+            GaitError::UnknownTerrain {
+                what: format!(
+                    "under leg `{}` standing at ({:.2}, {:.2})",
+                    leg.name(),
+                    w.x,
+                    w.y
+                ),
+            }
         })?;
         rests.push((w, rest, n));
     }
     let z = rests.iter().map(|(_, rest, n)| rest - n.z).sum::<f64>() / rests.len().max(1) as f64;
-    let _ = height;
     let body = Isometry3::from_parts(Translation3::new(x, y, z), rotation);
     let inverse = body.inverse();
     let mut legs = Vec::new();

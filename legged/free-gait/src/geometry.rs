@@ -51,10 +51,7 @@ pub(crate) fn com_world(
     body: &Isometry3<f64>,
     posture: &[Vec<f64>],
 ) -> Option<Point3<f64>> {
-    model
-        .centre_of_mass(posture)
-        .ok()
-        .map(|m| body * m.centre)
+    model.centre_of_mass(posture).ok().map(|m| body * m.centre)
 }
 
 /// The support polygon of some feet (world contact points).

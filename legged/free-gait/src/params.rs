@@ -82,7 +82,9 @@ impl GaitParams {
             && legs.iter().all(|l| {
                 l.joint_frames(&l.neutral()).is_ok_and(|frames| {
                     l.joints().iter().zip(&frames).any(|(j, f)| match j.kind() {
-                        JointKind::Prismatic { axis } => (f.rotation * axis.into_inner()).z.abs() > 0.99,
+                        JointKind::Prismatic { axis } => {
+                            (f.rotation * axis.into_inner()).z.abs() > 0.99
+                        }
                         JointKind::Revolute { .. } => false,
                     })
                 })

@@ -26,7 +26,10 @@ fn go(name: &str, terrain: Arc<HeightField>) -> Walk {
         w.min_margin,
         w.min_planned_margin,
         w.final_distance,
-        w.error.as_ref().map(|e| format!(": {e}")).unwrap_or_default()
+        w.error
+            .as_ref()
+            .map(|e| format!(": {e}"))
+            .unwrap_or_default()
     );
     w
 }

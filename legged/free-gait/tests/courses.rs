@@ -30,7 +30,10 @@ fn course(name: &str) {
         w.min_margin,
         w.min_planned_margin,
         w.final_distance,
-        w.error.as_ref().map(|e| format!(": {e}")).unwrap_or_default()
+        w.error
+            .as_ref()
+            .map(|e| format!(": {e}"))
+            .unwrap_or_default()
     );
     assert!(w.reached, "{name}: {w:?}");
 }

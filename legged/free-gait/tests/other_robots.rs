@@ -19,7 +19,10 @@ fn report(name: &str, w: &Walk) {
         w.min_margin,
         w.min_planned_margin,
         w.final_distance,
-        w.error.as_ref().map(|e| format!(": {e}")).unwrap_or_default()
+        w.error
+            .as_ref()
+            .map(|e| format!(": {e}"))
+            .unwrap_or_default()
     );
 }
 
@@ -47,7 +50,14 @@ fn hexapod_walks_rough_ground() {
 fn athlete_stands_and_steps_on_flat_ground() {
     let model = Arc::new(RobotModel::builtin("athlete").expect("athlete"));
     let terrain = field((-8.0, -8.0), (12.0, 8.0), 0.1, |_, _| 0.0);
-    let w = walk("athlete", model, terrain, (0.0, 0.0, 0.0), Point2::new(6.0, 0.0), 40);
+    let w = walk(
+        "athlete",
+        model,
+        terrain,
+        (0.0, 0.0, 0.0),
+        Point2::new(6.0, 0.0),
+        40,
+    );
     report("athlete flat", &w);
     assert!(w.steps >= 12, "{w:?}");
     assert!(w.error.is_none(), "{w:?}");
@@ -70,7 +80,14 @@ fn a_quadruped_written_here_walks_flat_ground() {
     );
     let model = Arc::new(RobotModel::from_urdf_str(&urdf).expect("the quadruped loads"));
     let terrain = field((-1.0, -1.0), (3.0, 1.0), 0.02, |_, _| 0.0);
-    let w = walk("quadruped", model, terrain, (0.0, 0.0, 0.0), Point2::new(1.5, 0.0), 600);
+    let w = walk(
+        "quadruped",
+        model,
+        terrain,
+        (0.0, 0.0, 0.0),
+        Point2::new(1.5, 0.0),
+        600,
+    );
     report("quadruped flat", &w);
     assert!(w.reached, "{w:?}");
 }
@@ -94,7 +111,14 @@ fn an_octopod_written_here_walks_flat_ground() {
     let urdf = insect_urdf("octopod", 0.6, 0.2, &hips);
     let model = Arc::new(RobotModel::from_urdf_str(&urdf).expect("the octopod loads"));
     let terrain = field((-1.0, -1.0), (3.0, 1.0), 0.02, |_, _| 0.0);
-    let w = walk("octopod", model, terrain, (0.0, 0.0, 0.0), Point2::new(1.5, 0.0), 600);
+    let w = walk(
+        "octopod",
+        model,
+        terrain,
+        (0.0, 0.0, 0.0),
+        Point2::new(1.5, 0.0),
+        600,
+    );
     report("octopod flat", &w);
     assert!(w.reached, "{w:?}");
 }

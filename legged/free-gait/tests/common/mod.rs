@@ -21,8 +21,18 @@ pub struct Executor {
     pub min_margin: f64,
 }
 
-fn margin_of(model: &RobotModel, body: &Isometry3<f64>, posture: &[Vec<f64>], feet: &[Point3<f64>]) -> f64 {
-    let polygon = support_polygon(&feet.iter().map(|p| Point2::new(p.x, p.y)).collect::<Vec<_>>());
+fn margin_of(
+    model: &RobotModel,
+    body: &Isometry3<f64>,
+    posture: &[Vec<f64>],
+    feet: &[Point3<f64>],
+) -> f64 {
+    let polygon = support_polygon(
+        &feet
+            .iter()
+            .map(|p| Point2::new(p.x, p.y))
+            .collect::<Vec<_>>(),
+    );
     let com = body * model.centre_of_mass(posture).expect("posture").centre;
     stability_margin(&polygon, com)
 }
@@ -61,14 +71,19 @@ impl Executor {
             let pose = body * s.pose;
             let lowest = pose.translation.z - s.shape.depth_below(&pose);
             let centre = Point2::new(pose.translation.x, pose.translation.y);
-            let top = self.terrain.max_height_in_disc(centre, s.shape.bounding_radius());
+            let top = self
+                .terrain
+                .max_height_in_disc(centre, s.shape.bounding_radius());
             if lowest > top {
                 continue;
             }
             for p in surface(&s.shape, self.spacing) {
                 let w = pose * p;
                 if w.z < top && w.z < self.terrain.height_at(w.x, w.y) {
-                    return Some(format!("{} at ({:.2}, {:.2}, {:.2})", s.link, w.x, w.y, w.z));
+                    return Some(format!(
+                        "{} at ({:.2}, {:.2}, {:.2})",
+                        s.link, w.x, w.y, w.z
+                    ));
                 }
             }
         }
@@ -77,7 +92,11 @@ impl Executor {
 
     fn record(&mut self, m: f64) -> Result<(), String> {
         self.min_margin = self.min_margin.min(m);
-        if m > 0.0 { Ok(()) } else { Err(format!("margin {m:.3} m: the robot tips over")) }
+        if m > 0.0 {
+            Ok(())
+        } else {
+            Err(format!("margin {m:.3} m: the robot tips over"))
+        }
     }
 
     pub fn apply(&mut self, state: &mut GaitState, action: &Action) -> Result<(), String> {
@@ -104,7 +123,10 @@ impl Executor {
                 let leg = &self.model.legs()[i];
                 let centre = state.legs[i].foot + Vector3::z() * leg.foot_radius();
                 let s = leg
-                    .inverse_kinematics(&(pose.inverse() * centre), &IkOptions::starting_at(&posture[i]))
+                    .inverse_kinematics(
+                        &(pose.inverse() * centre),
+                        &IkOptions::starting_at(&posture[i]),
+                    )
                     .map_err(|e| format!("body move: {e}"))?;
                 posture[i] = s.joints;
             }
@@ -120,7 +142,12 @@ impl Executor {
         Ok(())
     }
 
-    fn swing(&mut self, state: &mut GaitState, leg: usize, waypoints: &[Vec<f64>]) -> Result<(), String> {
+    fn swing(
+        &mut self,
+        state: &mut GaitState,
+        leg: usize,
+        waypoints: &[Vec<f64>],
+    ) -> Result<(), String> {
         let others: Vec<Point3<f64>> = (0..state.legs.len())
             .filter(|&i| i != leg && state.legs[i].stance)
             .map(|i| state.legs[i].foot)
@@ -137,7 +164,10 @@ impl Executor {
         state.legs[leg].stance = false;
         for (w, to) in waypoints.iter().enumerate() {
             if !l.within_limits(to) {
-                return Err(format!("way-point {w} of leg {} is outside its joint limits", l.name()));
+                return Err(format!(
+                    "way-point {w} of leg {} is outside its joint limits",
+                    l.name()
+                ));
             }
             let last = w + 1 == waypoints.len();
             let fa = l.foot_position(&from).unwrap();
@@ -158,7 +188,10 @@ impl Executor {
                     return Ok(());
                 }
                 if gap < -0.002 * (1.0 + r) && !(w == 0 && t < 0.5) {
-                    return Err(format!("leg {} drives its foot into the ground (gap {gap:.3})", l.name()));
+                    return Err(format!(
+                        "leg {} drives its foot into the ground (gap {gap:.3})",
+                        l.name()
+                    ));
                 }
                 posture[leg] = q.clone();
                 self.record(margin_of(&self.model, &body, &posture, &others))?;
@@ -168,7 +201,10 @@ impl Executor {
             }
             from = to.clone();
         }
-        Err(format!("leg {} reached its last way-point without contact", l.name()))
+        Err(format!(
+            "leg {} reached its last way-point without contact",
+            l.name()
+        ))
     }
 }
 
@@ -197,10 +233,16 @@ fn surface(shape: &Shape, d: f64) -> Vec<Point3<f64>> {
         }
         Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
             let around = n(std::f64::consts::TAU * radius).max(8);
-            let cap = if matches!(shape, Shape::Capsule { .. }) { radius } else { 0.0 };
+            let cap = if matches!(shape, Shape::Capsule { .. }) {
+                radius
+            } else {
+                0.0
+            };
             for z in lin(length + 2.0 * cap) {
                 let rr = if z.abs() > length / 2.0 {
-                    (radius * radius - (z.abs() - length / 2.0).powi(2)).max(0.0).sqrt()
+                    (radius * radius - (z.abs() - length / 2.0).powi(2))
+                        .max(0.0)
+                        .sqrt()
                 } else {
                     radius
                 };
@@ -217,7 +259,8 @@ fn surface(shape: &Shape, d: f64) -> Vec<Point3<f64>> {
         }
         Shape::Sphere { radius } => {
             for i in 0..=n(std::f64::consts::PI * radius).max(6) {
-                let polar = std::f64::consts::PI * i as f64 / n(std::f64::consts::PI * radius).max(6) as f64;
+                let polar = std::f64::consts::PI * i as f64
+                    / n(std::f64::consts::PI * radius).max(6) as f64;
                 let around = n(std::f64::consts::TAU * radius * polar.sin()).max(1);
                 for k in 0..around {
                     let a = k as f64 * std::f64::consts::TAU / around as f64;
@@ -259,7 +302,8 @@ pub fn walk(
     let params = GaitParams::for_model(&model);
     let gait = FreeGait::new(model.clone(), params.clone());
     let view = GridView::new(terrain.clone());
-    let mut state = stand(&model, &view, start.0, start.1, start.2).expect("the robot stands at the start");
+    let mut state =
+        stand(&model, &view, start.0, start.1, start.2).expect("the robot stands at the start");
     let mut exec = Executor::new(model, terrain);
     let began = std::time::Instant::now();
     let mut min_planned = f64::INFINITY;
@@ -289,7 +333,10 @@ pub fn walk(
             Err(e) => {
                 if std::env::var_os("GAIT_DEBUG").is_some() {
                     let t = state.body.translation.vector;
-                    eprintln!("{robot}: stuck with the body at ({:.2}, {:.2}, {:.2})", t.x, t.y, t.z);
+                    eprintln!(
+                        "{robot}: stuck with the body at ({:.2}, {:.2}, {:.2})",
+                        t.x, t.y, t.z
+                    );
                     for (i, l) in state.legs.iter().enumerate() {
                         let local = state.body.inverse() * l.foot;
                         eprintln!(
@@ -318,7 +365,12 @@ pub fn walk(
 }
 
 /// A height field from a function over a rectangle.
-pub fn field(min: (f64, f64), max: (f64, f64), cell: f64, f: impl Fn(f64, f64) -> f64) -> Arc<HeightField> {
+pub fn field(
+    min: (f64, f64),
+    max: (f64, f64),
+    cell: f64,
+    f: impl Fn(f64, f64) -> f64,
+) -> Arc<HeightField> {
     let nx = ((max.0 - min.0) / cell).round() as usize + 1;
     let ny = ((max.1 - min.1) / cell).round() as usize + 1;
     let mut h = Vec::with_capacity(nx * ny);
@@ -339,7 +391,13 @@ pub fn noise(x: f64, y: f64, seed: f64) -> f64 {
 }
 
 /// Flat around (x0, y0) within `r`, `f` beyond, blended over a metre.
-pub fn with_flat_start(x0: f64, y0: f64, r: f64, blend: f64, f: impl Fn(f64, f64) -> f64) -> impl Fn(f64, f64) -> f64 {
+pub fn with_flat_start(
+    x0: f64,
+    y0: f64,
+    r: f64,
+    blend: f64,
+    f: impl Fn(f64, f64) -> f64,
+) -> impl Fn(f64, f64) -> f64 {
     move |x, y| {
         let d = (x - x0).hypot(y - y0);
         let w = ((d - r) / blend).clamp(0.0, 1.0);
@@ -364,7 +422,9 @@ pub mod ambler_courses {
 
     /// Smooth bumps of up to about 0.25 m.
     pub fn rough() -> Arc<HeightField> {
-        make(with_flat_start(3.0, 0.0, 3.5, 1.5, |x, y| 0.25 * noise(x, y, 1.0)))
+        make(with_flat_start(3.0, 0.0, 3.5, 1.5, |x, y| {
+            0.25 * noise(x, y, 1.0)
+        }))
     }
 
     /// Boulders (spherical caps) up to 1 m high over x 7..21.
@@ -372,7 +432,9 @@ pub mod ambler_courses {
         let mut rocks = Vec::new();
         let mut s = 12345u64;
         let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (s >> 11) as f64 / (1u64 << 53) as f64
         };
         for _ in 0..40 {
@@ -398,7 +460,13 @@ pub mod ambler_courses {
 
     /// A ditch 1 m wide and 1.5 m deep across the course at x 12..13.
     pub fn ditch() -> Arc<HeightField> {
-        make(|x, _| if (12.0..=13.0).contains(&x) { -1.5 } else { 0.0 })
+        make(|x, _| {
+            if (12.0..=13.0).contains(&x) {
+                -1.5
+            } else {
+                0.0
+            }
+        })
     }
 
     /// A 25 degree climb from x = 9 to x = 15, then a plateau.
@@ -409,7 +477,13 @@ pub mod ambler_courses {
 
     /// A chasm 5 m wide and 3 m deep at x 10..15: no way across.
     pub fn chasm() -> Arc<HeightField> {
-        make(|x, _| if (10.0..=15.0).contains(&x) { -3.0 } else { 0.0 })
+        make(|x, _| {
+            if (10.0..=15.0).contains(&x) {
+                -3.0
+            } else {
+                0.0
+            }
+        })
     }
 }
 
@@ -485,6 +559,8 @@ pub mod hexapod_courses {
 
     /// Waves of up to about 4 cm.
     pub fn rough() -> Arc<HeightField> {
-        make(with_flat_start(0.3, 0.0, 0.35, 0.15, |x, y| 0.04 * noise(x * 10.0, y * 10.0, 2.0)))
+        make(with_flat_start(0.3, 0.0, 0.35, 0.15, |x, y| {
+            0.04 * noise(x * 10.0, y * 10.0, 2.0)
+        }))
     }
 }
