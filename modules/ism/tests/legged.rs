@@ -147,10 +147,7 @@ async fn the_legged_ism_asks_for_the_body_pose() {
     let _controller = within(
         "controller",
         Module::builder("controller")
-            .handle(move |_ctx, _q: tca_legged_messages::BodyPose| {
-                let p = p.clone();
-                async move { Ok(p) }
-            })
+            .handle(move |_ctx, _q: tca_legged_messages::BodyPose| async move { Ok(p) })
             .connect(&c),
     )
     .await

@@ -16,10 +16,23 @@
 //! - [`footfall`]: footfall cost and slope over the foot's area.
 //! - [`region`]: checked query regions (polygon and resolution) and their grids.
 //! - [`query`]: answering region queries, and the query cache.
-//! - [`manager`]: [`LocalTerrainMap`], the whole manager's state, and [`LtmConfig`].
+//! - [`manager`]: [`LocalTerrainMap`], the whole manager's state, and [`LtmConfig`]
+//!   ([`LtmConfig::for_robot`] sizes cells, window and foot for a walking robot of any
+//!   scale).
 //! - [`module`]: the LTM Manager on the bus: [`connect`] answers `mapRegion`, asking the ISM
 //!   for `acquireImage` when a refresh is requested or it has no map yet.
 //! - [`error`]: [`LtmError`] and the [`Result`] alias.
+
+//! # Legged robots
+//!
+//! Images from a multi-legged robot's scanner (`tca_ism::IsmConfig::legged_simulated`) carry
+//! the same transform chain as the single leg's, with the legged body as the body frame, so
+//! they build and merge unchanged: the builder works in world coordinates whatever the
+//! scanner's position and orientation, and [`LocalTerrainMap::add_image`] scrolls the window
+//! to the image's body origin (the window stays aligned with the world axes at any heading).
+//! [`LtmConfig::for_robot`]`(cell_m, half_side_m, foot_radius_m)` gives a map at the robot's
+//! scale, e.g. `for_robot(0.1, 10.0, 0.15)` for the Ambler and `for_robot(0.02, 1.0, 0.012)`
+//! for the small hexapod.
 
 pub mod builder;
 pub mod cell;

@@ -65,6 +65,50 @@ impl Default for LtmConfig {
     }
 }
 
+impl LtmConfig {
+    /// A map sized for a walking robot of any scale, for images from a legged ISM
+    /// (`tca_ism::IsmConfig::legged_simulated`, the Perceptron on the body's mast):
+    ///
+    /// - cells of `cell_m` (0.1 m suits the Ambler, 0.02 m the small hexapod);
+    /// - a square window of `2 * half_side_m` around the body kept in memory; it scrolls to
+    ///   the body origin of every image merged (whatever the heading: the window stays
+    ///   aligned with the world axes), paging the rest to disk;
+    /// - tiles of about an eighth of the window's side (between 8 and 256 cells);
+    /// - points mapped up to `2 * half_side_m` horizontally from the scanner, over an
+    ///   elevation band of -10..10 m (well inside the Perceptron's 40 m ambiguity interval);
+    /// - footfall and slope maps for a foot of radius `foot_radius_m` (the evaluation uses
+    ///   at least 1.5 cells, see [`FootParams`]);
+    /// - the Perceptron asked for when the module needs an image.
+    ///
+    /// Everything else is [`LtmConfig::default`]'s. Bad values (not positive, not finite) are
+    /// refused by [`LocalTerrainMap::new`] with the reason.
+    pub fn for_robot(cell_m: f64, half_side_m: f64, foot_radius_m: f64) -> Self {
+        let base = Self::default();
+        let tile_cells = if cell_m > 0.0 && half_side_m > 0.0 {
+            (half_side_m / (4.0 * cell_m)).round().clamp(8.0, 256.0) as usize
+        } else {
+            base.tile_cells
+        };
+        Self {
+            builder: BuilderConfig {
+                resolution_m: cell_m,
+                min_elevation_m: -10.0,
+                max_elevation_m: 10.0,
+                max_horizontal_range_m: 2.0 * half_side_m,
+                ..base.builder.clone()
+            },
+            window_m: 2.0 * half_side_m,
+            tile_cells,
+            foot: FootParams {
+                radius_m: foot_radius_m,
+                ..base.foot
+            },
+            sensor: SensorKind::Perceptron,
+            ..base
+        }
+    }
+}
+
 /// What merging a map did.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MergeReport {
