@@ -2,6 +2,8 @@
 
 mod central;
 mod chaos;
+mod course;
+mod legged_walk;
 mod log;
 mod map;
 mod module;
@@ -28,7 +30,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Walk the leg down an obstacle course, autonomously, and report what happened.
+    /// Walk the leg down an obstacle course (or, with --robot, a multi-legged robot across
+    /// a course or terrain), autonomously, and report what happened.
     Walk(walk::WalkArgs),
     /// Run central control, serving modules over zenoh.
     Central(central::CentralArgs),
@@ -53,6 +56,9 @@ enum Command {
     /// Multi-legged robot descriptions (URDF): what they say.
     #[command(subcommand)]
     Robot(robot::RobotCommand),
+    /// Built-in courses for multi-legged robots: list them, write them as .asc files.
+    #[command(subcommand)]
+    Course(course::CourseCommand),
 }
 
 /// Where to find central (shared by the commands that connect).
@@ -128,6 +134,7 @@ pub(crate) fn main() -> ExitCode {
             Command::Log(cmd) => log::run(cmd).await,
             Command::Map(args) => map::run(args).await,
             Command::Robot(cmd) => robot::run(cmd).await,
+            Command::Course(cmd) => course::run(cmd).await,
         }
     });
     match result {

@@ -11,51 +11,70 @@ use tca_walk::{Progress, TerrainChoice, WalkOptions};
 use tokio::sync::mpsc;
 
 #[derive(Debug, Args)]
+#[command(after_help = "Examples:
+  tca walk                                  the single leg on obstacle course 3
+  tca walk --course 4 --concurrent --json   course 4, planning during execution
+  tca walk --robot ambler --course boulders the six-legged Ambler across a boulder field
+  tca walk --robot hexapod                  the small hexapod on its rough course
+  tca walk --robot my_robot.urdf --terrain ground.asc --start 1,2 --goal 9,2")]
 pub(crate) struct WalkArgs {
-    /// Built-in obstacle course 1, 2, 3 or 4 (§7), or "random" (a course from --seed).
-    #[arg(long, default_value = "3", conflicts_with = "terrain")]
-    course: String,
+    /// Walk a multi-legged robot instead of the single leg: a shipped robot (ambler,
+    /// hexapod, athlete) or the path of a URDF file (conventions in the README).
+    #[arg(long, value_name = "NAME|FILE.urdf")]
+    pub(crate) robot: Option<String>,
+    /// Built-in course: for the single leg 1, 2, 3 (the default) or 4 (§7), or "random" (a
+    /// course from --seed); with --robot one of `tca course list` (default: the robot's own
+    /// scale's rough ground).
+    #[arg(long, conflicts_with = "terrain")]
+    pub(crate) course: Option<String>,
     /// Walk on a terrain loaded from an ESRI ASCII grid (.asc) file instead.
     #[arg(long, value_name = "FILE.asc")]
-    terrain: Option<PathBuf>,
-    /// Carriage goal along the rails, metres (the rails run from 0.5 to 10.5 m).
-    #[arg(long, value_name = "METRES", allow_negative_numbers = true)]
-    goal: Option<f64>,
+    pub(crate) terrain: Option<PathBuf>,
+    /// The goal: for the single leg the carriage's place on the rails, metres (the rails
+    /// run from 0.5 to 10.5 m); with --robot the body's goal X,Y in world metres (default:
+    /// the course's goal, or near a terrain file's east edge).
+    #[arg(long, value_name = "METRES|X,Y", allow_negative_numbers = true)]
+    pub(crate) goal: Option<String>,
+    /// With --robot: where the body starts, X,Y[,YAW] in world metres and radians
+    /// (default: the course's start, or near a terrain file's west edge, facing east).
+    #[arg(long, value_name = "X,Y[,YAW]", allow_negative_numbers = true, requires = "robot")]
+    pub(crate) start: Option<String>,
     /// Then walk back to the start, using the maps made walking forward.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "robot")]
     backward: bool,
     /// Plan the next step while this one executes (§3.3, §7.2).
     #[arg(long)]
-    concurrent: bool,
+    pub(crate) concurrent: bool,
     /// Seed of the random course and of the scanner noise.
     #[arg(long, default_value_t = 1)]
-    seed: u64,
-    /// Directory for the traffic log and the pictures.
-    #[arg(long, value_name = "DIR", default_value = "out/walk")]
-    out: PathBuf,
+    pub(crate) seed: u64,
+    /// Directory for the traffic log, the pictures and (with --robot) report.json
+    /// (default: out/walk, or out/walk-ROBOT with --robot).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
     /// Also write every step's cost maps and leg search as pictures (in DIR/steps).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "robot")]
     pictures: bool,
     /// Walk with the modules already running behind central at this zenoh endpoint
     /// (`tca up walk.toml`); the log and pictures are then central's and the modules'.
-    #[arg(long, value_name = "ENDPOINT")]
+    #[arg(long, value_name = "ENDPOINT", conflicts_with = "robot")]
     connect: Option<String>,
     /// What the planners' computing costs in simulated time: "paper" (the 1990 system's
     /// times, §7.2: Gait Planner 2 s, Leg Recovery Planner 12 s a step) or "measured" (this
     /// machine's milliseconds).
-    #[arg(long, value_enum, default_value_t = super::Compute::Paper)]
+    #[arg(long, value_enum, default_value_t = super::Compute::Paper, conflicts_with = "robot")]
     compute: super::Compute,
     /// Inject a fault in the simulated Controller during the body move of step STEP
     /// (counting body moves from the start): `slip` (the foot slips; the Gait Planner
     /// replans from where the leg is), `force-drop` (the foot force drops off) or
     /// `limit-switch` (a limit switch trips); the last two are hardware faults that halt the
     /// walk with the reason.
-    #[arg(long, value_name = "KIND@STEP", value_parser = parse_fault, conflicts_with = "connect")]
+    #[arg(long, value_name = "KIND@STEP", value_parser = parse_fault, conflicts_with_all = ["connect", "robot"])]
     fault: Option<ScheduledFault>,
     /// A rigid leg: no deflection in the simulated Controller and none compensated by the
     /// planners. By default the leg and rails deflect as the report's did (up to about 20 cm
     /// for a leg move far out to the side) and the planners' kinematics compensate.
-    #[arg(long, conflicts_with = "connect")]
+    #[arg(long, conflicts_with_all = ["connect", "robot"])]
     rigid: bool,
     /// How the simulated Controller propels the carriage: `servo` (the default: a velocity
     /// law on the carriage position, within a few centimetres) or `open-loop` (the report's
@@ -65,12 +84,12 @@ pub(crate) struct WalkArgs {
         long,
         value_name = "LAW",
         default_value = "servo",
-        conflicts_with = "connect"
+        conflicts_with_all = ["connect", "robot"]
     )]
     body_move: BodyMoveLaw,
     /// Print the summary as one JSON object on the last line of stdout.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
 }
 
 fn parse_fault(text: &str) -> Result<ScheduledFault, String> {
@@ -78,10 +97,22 @@ fn parse_fault(text: &str) -> Result<ScheduledFault, String> {
 }
 
 pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
-    let terrain = TerrainChoice::from_args(&args.course, args.terrain.as_deref(), args.seed)?;
+    if args.robot.is_some() {
+        return super::legged_walk::run(args).await;
+    }
+    let course = args.course.as_deref().unwrap_or("3");
+    let terrain = TerrainChoice::from_args(course, args.terrain.as_deref(), args.seed)?;
+    let goal_y_m = match &args.goal {
+        None => None,
+        Some(text) => Some(text.trim().parse::<f64>().map_err(|_| {
+            anyhow::anyhow!(
+                "--goal {text:?} is not a place on the rails; give metres, e.g. --goal 9.5 (a goal X,Y is for a multi-legged robot: add --robot NAME)"
+            )
+        })?),
+    };
     let options = WalkOptions {
         terrain,
-        goal_y_m: args.goal,
+        goal_y_m,
         backward: args.backward,
         mode: if args.concurrent {
             WalkMode::Concurrent
@@ -89,7 +120,10 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
             WalkMode::Sequential
         },
         seed: args.seed,
-        out: args.connect.is_none().then(|| args.out.clone()),
+        out: args
+            .connect
+            .is_none()
+            .then(|| args.out.clone().unwrap_or_else(|| PathBuf::from("out/walk"))),
         step_pictures: args.pictures,
         connect: args.connect.clone(),
         compute: args.compute.into(),

@@ -7,7 +7,9 @@ use std::sync::Arc;
 use tca_legged_controller::LeggedControllerConfig;
 use tca_legged_model::RobotModel;
 use tca_legged_sim::{SimParams, StartPose};
-use tca_module::{Connector, Module, ModuleError};
+use tca_ism::{BodyDimensions, IsmConfig};
+use tca_ltm::LtmConfig;
+use tca_module::{ComputeTime, Connector, Module, ModuleError};
 use tca_robot::HeightField;
 
 use crate::gait_module::GaitModuleConfig;
@@ -38,7 +40,14 @@ impl LeggedSetup {
         2.0 * max_reach(&self.model)
     }
 
-    /// The map's cell: a tenth of the longest leg's reach, at most 0.1 m.
+    /// The body's size and standing height, for the scanner's mast: the extent of the body
+    /// link's collision shapes (the feet's span when it has none) and the body origin's
+    /// height over the feet in the neutral posture.
+    pub fn body_dimensions(&self) -> BodyDimensions {
+        body_dimensions(&self.model)
+    }
+
+    /// The map's cell: a twentieth of the longest leg's reach, at most 0.1 m.
     pub fn map_cell_m(&self) -> f64 {
         (max_reach(&self.model) / 20.0).clamp(0.01, 0.1)
     }
@@ -62,6 +71,27 @@ pub async fn connect_module(
             };
             tca_legged_controller::connect(connector, config).await
         }
+        "ism" => {
+            let config = IsmConfig::legged_simulated(
+                setup.terrain.clone(),
+                &setup.body_dimensions(),
+                setup.seed,
+            )
+            .with_simulated_time(true);
+            tca_ism::connect(connector, config).await
+        }
+        "ltm" => {
+            let config = LtmConfig {
+                simulated_time: true,
+                compute_time: ComputeTime::Measured,
+                ..LtmConfig::for_robot(
+                    setup.map_cell_m(),
+                    setup.map_half_side_m(),
+                    foot_radius(&setup.model),
+                )
+            };
+            tca_ltm::connect(connector, config).await
+        }
         "gait" => {
             let config = GaitModuleConfig::new(
                 setup.model.clone(),
@@ -74,5 +104,69 @@ pub async fn connect_module(
             "no legged walking module named {other:?}; they are {}",
             LEGGED_MODULES.join(", ")
         ))),
+    }
+}
+
+/// Connects all the legged walking modules, in [`LEGGED_MODULES`]'s order.
+pub async fn connect_all(
+    connector: &Connector,
+    setup: &LeggedSetup,
+) -> Result<Vec<Module>, ModuleError> {
+    let mut modules = Vec::new();
+    for name in LEGGED_MODULES {
+        modules.push(connect_module(name, connector, setup).await?);
+    }
+    Ok(modules)
+}
+
+/// The largest foot's contact radius, metres (the footfall map is evaluated for it).
+pub fn foot_radius(model: &RobotModel) -> f64 {
+    model
+        .legs()
+        .iter()
+        .map(|l| l.foot_radius())
+        .fold(0.0, f64::max)
+        .max(0.01)
+}
+
+/// The body's length and width (the extent along body x and y of the body link's collision
+/// shapes, each taken as its bounding ball; the feet's neutral span when the body has no
+/// shapes) and its standing height ([`RobotModel::neutral_height`]).
+pub fn body_dimensions(model: &RobotModel) -> BodyDimensions {
+    // Discs (x, y, radius) in the body frame whose union the body spans.
+    let mut discs: Vec<(f64, f64, f64)> = model
+        .link(model.body_link())
+        .map(|body| {
+            body.collisions()
+                .iter()
+                .map(|c| {
+                    let t = c.origin.translation.vector;
+                    (t.x, t.y, c.shape.bounding_radius())
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    if discs.is_empty() {
+        discs = model
+            .foot_positions(&model.neutral_posture())
+            .unwrap_or_default()
+            .iter()
+            .map(|f| (f.x, f.y, 0.0))
+            .collect();
+    }
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for (x, y, r) in discs {
+        lo = [lo[0].min(x - r), lo[1].min(y - r)];
+        hi = [hi[0].max(x + r), hi[1].max(y + r)];
+    }
+    let span = |i: usize| {
+        let d = hi[i] - lo[i];
+        if d.is_finite() && d > 0.0 { d } else { 0.1 }
+    };
+    BodyDimensions {
+        length_m: span(0),
+        width_m: span(1),
+        standing_height_m: model.neutral_height().max(0.01),
     }
 }

@@ -77,45 +77,58 @@ impl LeggedTerrain {
     }
 }
 
-/// Refuses a point (start or goal) where the robot would not fit on the terrain: not a
-/// number, or nearer the edge than the robot's footprint reaches.
+/// Refuses a place (start or goal) where the robot would not fit on the terrain: not a
+/// number, or with a foot of the neutral stance, the body turned to `yaw_rad`, off the
+/// terrain's edge.
 pub fn check_place(
     what: &str,
     p: Point2<f64>,
+    yaw_rad: f64,
     terrain: &HeightField,
-    footprint_radius_m: f64,
+    model: &RobotModel,
 ) -> anyhow::Result<()> {
     let (lo, hi) = terrain.extent();
-    if !(p.x.is_finite() && p.y.is_finite()) {
-        anyhow::bail!("the {what} ({}, {}) is not a point; give X,Y in metres", p.x, p.y);
-    }
-    let r = footprint_radius_m;
-    if p.x < lo.x + r || p.x > hi.x - r || p.y < lo.y + r || p.y > hi.y - r {
+    if !(p.x.is_finite() && p.y.is_finite() && yaw_rad.is_finite()) {
         anyhow::bail!(
-            "the {what} ({:.2}, {:.2}) is too near the edge of the terrain, which spans X {:.2}..{:.2} m and Y {:.2}..{:.2} m: the robot reaches {r:.2} m around its body, so give a {what} with X in {:.2}..{:.2} and Y in {:.2}..{:.2}",
+            "the {what} ({}, {}) facing {yaw_rad} rad is not a place; give X,Y in metres (and a yaw in radians)",
             p.x,
-            p.y,
-            lo.x,
-            hi.x,
-            lo.y,
-            hi.y,
-            lo.x + r,
-            hi.x - r,
-            lo.y + r,
-            hi.y - r
+            p.y
         );
+    }
+    let (s, c) = yaw_rad.sin_cos();
+    let feet = model
+        .foot_positions(&model.neutral_posture())
+        .unwrap_or_default();
+    for (f, leg) in feet.iter().zip(model.legs()) {
+        let r = leg.foot_radius();
+        let (x, y) = (p.x + c * f.x - s * f.y, p.y + s * f.x + c * f.y);
+        if x - r < lo.x || x + r > hi.x || y - r < lo.y || y + r > hi.y {
+            anyhow::bail!(
+                "the {what} ({:.2}, {:.2}) is too near the edge of the terrain, which spans X {:.2}..{:.2} m and Y {:.2}..{:.2} m: standing there facing {:.0}°, foot {} would be at ({x:.2}, {y:.2}), off the terrain; give a {what} farther inside",
+                p.x,
+                p.y,
+                lo.x,
+                hi.x,
+                lo.y,
+                hi.y,
+                yaw_rad.to_degrees(),
+                leg.name()
+            );
+        }
     }
     Ok(())
 }
 
-/// How far the robot's feet reach from the body's origin, horizontally, metres.
+/// How far the robot's standing feet reach from the body's origin, horizontally, metres:
+/// the farthest foot in the neutral posture, plus its contact radius.
 pub fn footprint_radius(model: &RobotModel) -> f64 {
-    let feet = model.foot_positions(&model.neutral_posture()).unwrap_or_default();
-    let neutral = feet
-        .iter()
-        .map(|f| (f.x * f.x + f.y * f.y).sqrt())
-        .fold(0.0, f64::max);
-    neutral.max(0.0) + max_reach(model) * 0.5
+    let feet = model
+        .foot_positions(&model.neutral_posture())
+        .unwrap_or_default();
+    feet.iter()
+        .zip(model.legs())
+        .map(|(f, leg)| f.x.hypot(f.y) + leg.foot_radius())
+        .fold(0.0, f64::max)
 }
 
 /// The longest leg's reach bound, metres.

@@ -7,9 +7,9 @@ use std::sync::{Arc, Mutex};
 use tca_messages::NodeId;
 
 /// A walk fails when this many steps in a row have not brought the body nearer the goal.
-pub const MAX_IDLE_STEPS: u32 = 12;
+pub(crate) const MAX_IDLE_STEPS: u32 = 12;
 /// Nearer by less than this is not nearer, metres.
-pub const PROGRESS_M: f64 = 0.01;
+pub(crate) const PROGRESS_M: f64 = 0.01;
 
 /// One walk.
 #[derive(Debug, Clone)]

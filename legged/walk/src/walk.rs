@@ -1,0 +1,291 @@
+//! A whole legged walk in one process: central (simulated time, the traffic logged), the
+//! Controller's simulator, the body-mounted scanner, the terrain map and the walking module,
+//! one `legged.walk` goal, and the report with every support change the Controller informed.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use anyhow::Context as _;
+use nalgebra::Point2;
+use tca_central::StartOptions;
+use tca_free_gait::GaitParams;
+use tca_legged_messages::{BodyPose, FootContact, LeggedStatus, LeggedWalk, SupportState};
+use tca_legged_model::{BUILTIN_ROBOTS, RobotModel};
+use tca_legged_sim::StartPose;
+use tca_messages::control::TaskOutcome;
+use tca_module::{Connector, Module};
+use tokio::sync::mpsc;
+
+use crate::messages::StepPlanned;
+use crate::picture;
+use crate::report::{LeggedWalkReport, StateRecord};
+use crate::system::{LeggedSetup, connect_all};
+use crate::terrain::{LeggedTerrain, check_place, footprint_radius};
+
+/// A walk is over at the latest after this much wall time.
+pub const WALK_TIMEOUT: Duration = Duration::from_secs(1800);
+
+/// What to walk.
+#[derive(Clone, Debug)]
+pub struct LeggedWalkOptions {
+    /// A shipped robot's name or a URDF file's path.
+    pub robot: String,
+    /// The ground; `None`: the robot's own scale's rough course.
+    pub terrain: Option<LeggedTerrain>,
+    /// Where the body starts `[x, y, yaw]`; `None`: the course's start, or a terrain file's
+    /// west edge.
+    pub start: Option<[f64; 3]>,
+    /// The goal `[x, y]`; `None`: the course's goal, or a terrain file's east edge.
+    pub goal: Option<[f64; 2]>,
+    /// How near the goal the body must come, metres; `None`: the free gait's default.
+    pub tolerance_m: Option<f64>,
+    /// Plan each step while the one before executes.
+    pub concurrent: bool,
+    /// Seed of the scanner noise.
+    pub seed: u64,
+    /// Where to write the log (`traffic.mcap`), the map picture (`map.png`) and the report
+    /// (`report.json`).
+    pub out: Option<PathBuf>,
+}
+
+impl LeggedWalkOptions {
+    /// A walk of `robot` on its default course with every other setting its default.
+    pub fn new(robot: impl Into<String>) -> Self {
+        LeggedWalkOptions {
+            robot: robot.into(),
+            terrain: None,
+            start: None,
+            goal: None,
+            tolerance_m: None,
+            concurrent: false,
+            seed: 1,
+            out: None,
+        }
+    }
+}
+
+/// Progress events for a display.
+#[derive(Clone, Debug)]
+pub enum Progress {
+    /// The walk starts.
+    Started {
+        /// Robot, terrain, start and goal, for people.
+        describe: String,
+    },
+    /// A step was planned.
+    Step(StepPlanned),
+}
+
+/// The robot's description and its URDF text.
+pub fn load_robot(name_or_path: &str) -> anyhow::Result<(RobotModel, String)> {
+    let model = RobotModel::load(name_or_path).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let urdf = match BUILTIN_ROBOTS.iter().find(|r| r.name == name_or_path) {
+        Some(r) => r.urdf.to_string(),
+        None => std::fs::read_to_string(name_or_path)
+            .with_context(|| format!("cannot read the robot description {name_or_path}"))?,
+    };
+    Ok((model, urdf))
+}
+
+/// What the walker module collects.
+#[derive(Default)]
+struct Collected {
+    states: Vec<StateRecord>,
+    steps: Vec<StepPlanned>,
+}
+
+/// Walks, reporting progress through `progress`. Bad robots, terrains, starts and goals are
+/// refused before anything starts; a walk that cannot go on ends with the reason.
+pub async fn walk(
+    options: &LeggedWalkOptions,
+    progress: mpsc::UnboundedSender<Progress>,
+) -> anyhow::Result<LeggedWalkReport> {
+    let started = Instant::now();
+    let (model, urdf) = load_robot(&options.robot)?;
+    let model = Arc::new(model);
+    let params = GaitParams::for_model(&model);
+    let terrain_choice = options
+        .terrain
+        .clone()
+        .unwrap_or_else(|| LeggedTerrain::default_for(&model, options.seed));
+    let loaded = terrain_choice.load()?;
+    let field = Arc::new(loaded.field);
+    let reach = footprint_radius(&model);
+    let (lo, hi) = field.extent();
+    let mid_y = 0.5 * (lo.y + hi.y);
+    let start = options
+        .start
+        .or(loaded.start)
+        .unwrap_or([lo.x + reach + 0.05 * (hi.x - lo.x).min(1.0), mid_y, 0.0]);
+    let goal = options
+        .goal
+        .or(loaded.goal.map(|g| [g.x, g.y]))
+        .unwrap_or([hi.x - reach - 0.05 * (hi.x - lo.x).min(1.0), mid_y]);
+    check_place("start", Point2::new(start[0], start[1]), start[2], &field, &model)?;
+    let heading = (goal[1] - start[1]).atan2(goal[0] - start[0]);
+    check_place("goal", Point2::new(goal[0], goal[1]), heading, &field, &model)?;
+    let tolerance_m = options.tolerance_m.unwrap_or(params.goal_tolerance_m);
+    if !(tolerance_m > 0.0 && tolerance_m.is_finite()) {
+        anyhow::bail!("the goal tolerance {tolerance_m} m must be a positive distance");
+    }
+    let setup = LeggedSetup {
+        model: model.clone(),
+        urdf,
+        terrain: field.clone(),
+        start: StartPose {
+            x_m: start[0],
+            y_m: start[1],
+            yaw_rad: start[2],
+        },
+        seed: options.seed,
+    };
+    let describe = format!(
+        "{} on {}, from ({:.2}, {:.2}) to ({:.2}, {:.2})",
+        model.name(),
+        loaded.describe,
+        start[0],
+        start[1],
+        goal[0],
+        goal[1]
+    );
+    let _ = progress.send(Progress::Started {
+        describe: describe.clone(),
+    });
+
+    if let Some(dir) = &options.out {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    let log_path = options.out.as_ref().map(|d| d.join("traffic.mcap"));
+    let central = tca_central::start(StartOptions {
+        log: log_path.clone(),
+        config: tca_central::CentralConfig {
+            simulated_time: true,
+            ..tca_central::CentralConfig::default()
+        },
+        ..StartOptions::default()
+    })
+    .await
+    .context("cannot start central")?;
+    let connector = Connector::from(central.in_process());
+    let modules = connect_all(&connector, &setup)
+        .await
+        .map_err(|e| anyhow::anyhow!("cannot start the legged walking modules: {e}"))?;
+
+    let collected = Arc::new(Mutex::new(Collected::default()));
+    let (c1, c2) = (collected.clone(), collected.clone());
+    let progress_for_steps = progress.clone();
+    let walker = Module::builder(format!("legged-walker-{}", std::process::id()))
+        .simulated_time(true)
+        .requery_after_crash(tca_module::REQUERIES_AFTER_CRASH)
+        .handle(move |_ctx, s: SupportState| {
+            lock(&c1).states.push(StateRecord::from(&s));
+            async { Ok(()) }
+        })
+        // Touch-downs are in the support states too; taken so that the Controller's informs
+        // have a receiver.
+        .handle(|_ctx, _contact: FootContact| async { Ok(()) })
+        .handle(move |_ctx, s: StepPlanned| {
+            lock(&c2).steps.push(s.clone());
+            let _ = progress_for_steps.send(Progress::Step(s));
+            async { Ok(()) }
+        })
+        .connect(&connector)
+        .await
+        .context("the walker cannot join central")?;
+
+    let task = walker.send_watched(
+        &LeggedWalk {
+            goal_x_m: goal[0],
+            goal_y_m: goal[1],
+            tolerance_m,
+            concurrent: options.concurrent,
+        },
+        [],
+    )?;
+    let outcome = tokio::time::timeout(WALK_TIMEOUT, task.outcome())
+        .await
+        .map_err(|_| anyhow::anyhow!("the walk did not end within {WALK_TIMEOUT:?}"))??;
+    let status = walker.query(&LeggedStatus).await?;
+    let body = walker.query(&BodyPose).await?;
+    let sim_time_s = walker.time_ns() as f64 / 1e9;
+    let distance_to_goal_m = (body.x_m - goal[0]).hypot(body.y_m - goal[1]);
+    // The last informs are delivered before the walk's outcome, but give them a moment.
+    tokio::time::sleep(Duration::from_millis(20)).await;
+    let (states, steps) = {
+        let mut c = lock(&collected);
+        (std::mem::take(&mut c.states), std::mem::take(&mut c.steps))
+    };
+    let (reached, reason) = match outcome {
+        TaskOutcome::Achieved if distance_to_goal_m <= tolerance_m => (true, None),
+        TaskOutcome::Achieved => (
+            false,
+            Some(format!(
+                "the walk ended with the body {distance_to_goal_m:.2} m from the goal, more than the tolerance {tolerance_m:.2} m"
+            )),
+        ),
+        TaskOutcome::Failed(reason) => (false, Some(reason)),
+        TaskOutcome::Killed => (false, Some("the walk was killed".into())),
+    };
+    let planning_ms_per_step = if steps.is_empty() {
+        0.0
+    } else {
+        steps.iter().map(|s| s.planning_ms).sum::<f64>() / steps.len() as f64
+    };
+    let mut report = LeggedWalkReport {
+        reached,
+        reason,
+        steps: steps.len(),
+        falls: status.falls,
+        collisions: status.collisions,
+        min_stability_margin_m: states.iter().map(|s| s.margin_m).reduce(f64::min),
+        sim_time_s,
+        wall_time_s: 0.0,
+        planning_ms_per_step,
+        states,
+        robot: model.name().to_string(),
+        terrain: loaded.describe,
+        mode: if options.concurrent {
+            "concurrent".into()
+        } else {
+            "sequential".into()
+        },
+        start,
+        goal,
+        distance_to_goal_m,
+        footholds: steps
+            .iter()
+            .flat_map(|s| {
+                s.footholds
+                    .iter()
+                    .map(|(leg, p)| (leg.clone(), [p.x_m, p.y_m, p.z_m]))
+            })
+            .collect(),
+        outputs: Vec::new(),
+    };
+    walker.close().await;
+    for m in modules {
+        m.close().await;
+    }
+    central.shutdown().await.context("central did not shut down cleanly")?;
+    report.wall_time_s = started.elapsed().as_secs_f64();
+    if let Some(dir) = &options.out {
+        if let Some(log) = log_path {
+            report.outputs.push(log);
+        }
+        let map = dir.join("map.png");
+        picture::map_picture(&field, &report)
+            .write_png(&map)
+            .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", map.display()))?;
+        report.outputs.push(map);
+        let json = dir.join("report.json");
+        report.outputs.push(json.clone());
+        std::fs::write(&json, serde_json::to_vec_pretty(&report)?)
+            .with_context(|| format!("cannot write {}", json.display()))?;
+    }
+    Ok(report)
+}
+
+fn lock(c: &Mutex<Collected>) -> std::sync::MutexGuard<'_, Collected> {
+    c.lock().unwrap_or_else(|p| p.into_inner())
+}

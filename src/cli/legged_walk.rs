@@ -1,0 +1,123 @@
+//! `tca walk --robot`: a multi-legged robot walking a course or a terrain file.
+
+use std::io::IsTerminal as _;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use tca_legged_walk::walk::Progress;
+use tca_legged_walk::{LeggedTerrain, LeggedWalkOptions};
+use tokio::sync::mpsc;
+
+use super::walk::WalkArgs;
+
+/// Parses `X,Y` (two numbers) or `X,Y,YAW` (three, when `yaw` is allowed).
+pub(crate) fn parse_place(what: &str, text: &str, yaw: bool) -> anyhow::Result<Vec<f64>> {
+    let values: Result<Vec<f64>, _> = text.split(',').map(|v| v.trim().parse::<f64>()).collect();
+    let form = if yaw { "X,Y or X,Y,YAW" } else { "X,Y" };
+    match values {
+        Ok(v) if v.len() == 2 || (yaw && v.len() == 3) => {
+            if v.iter().all(|x| x.is_finite()) {
+                Ok(v)
+            } else {
+                anyhow::bail!("--{what} {text:?} holds a value that is not a finite number")
+            }
+        }
+        _ => anyhow::bail!(
+            "--{what} {text:?} is not a place; give {form} in world metres{}, e.g. --{what} 3,0{}",
+            if yaw { " (and radians)" } else { "" },
+            if yaw { ",0.5" } else { "" }
+        ),
+    }
+}
+
+pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
+    let robot = args.robot.clone().unwrap_or_default();
+    let terrain = match (&args.course, &args.terrain) {
+        (_, Some(path)) => Some(LeggedTerrain::File(path.clone())),
+        (Some(name), None) => Some(LeggedTerrain::Course {
+            name: name.clone(),
+            seed: args.seed,
+        }),
+        (None, None) => None,
+    };
+    let start = match &args.start {
+        Some(text) => {
+            let v = parse_place("start", text, true)?;
+            Some([v[0], v[1], v.get(2).copied().unwrap_or(0.0)])
+        }
+        None => None,
+    };
+    let goal = match &args.goal {
+        Some(text) => {
+            let v = parse_place("goal", text, false)?;
+            Some([v[0], v[1]])
+        }
+        None => None,
+    };
+    let stem = std::path::Path::new(&robot)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "robot".into());
+    let options = LeggedWalkOptions {
+        robot,
+        terrain,
+        start,
+        goal,
+        tolerance_m: None,
+        concurrent: args.concurrent,
+        seed: args.seed,
+        out: Some(
+            args.out
+                .clone()
+                .unwrap_or_else(|| PathBuf::from(format!("out/walk-{stem}"))),
+        ),
+    };
+    let (tx, rx) = mpsc::unbounded_channel();
+    let display = tokio::spawn(show_progress(rx));
+    let result = tca_legged_walk::walk(&options, tx).await;
+    let _ = display.await;
+    let report = result?;
+    print!("{}", report.summary());
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    }
+    Ok(if report.reached {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(2)
+    })
+}
+
+/// One line per step (rewritten in place on a terminal), on stderr.
+async fn show_progress(mut rx: mpsc::UnboundedReceiver<Progress>) {
+    let tty = std::io::stderr().is_terminal();
+    while let Some(p) = rx.recv().await {
+        match p {
+            Progress::Started { describe } => eprintln!("walking {describe}"),
+            Progress::Step(s) => {
+                let legs: Vec<&str> = s.footholds.iter().map(|(l, _)| l.as_str()).collect();
+                let line = format!(
+                    "step {:>3}: {} to ({:.2}, {:.2}), margin {:.3} m, planned in {:.1} ms",
+                    s.step,
+                    if legs.is_empty() {
+                        "body".to_string()
+                    } else {
+                        format!("{} swung, body", legs.join(" "))
+                    },
+                    s.body_target.x_m,
+                    s.body_target.y_m,
+                    s.min_margin_m,
+                    s.planning_ms
+                );
+                if tty {
+                    eprint!("\r{line:<100}");
+                } else {
+                    eprintln!("{line}");
+                }
+            }
+        }
+    }
+    if tty {
+        eprintln!();
+    }
+}
