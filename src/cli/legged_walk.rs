@@ -66,6 +66,7 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         tolerance_m: None,
         concurrent: args.concurrent,
         seed: args.seed,
+        ground_truth: args.ground_truth,
         out: Some(
             args.out
                 .clone()

@@ -39,6 +39,10 @@ pub(crate) struct WalkArgs {
     /// (default: the course's start, or near a terrain file's west edge, facing east).
     #[arg(long, value_name = "X,Y[,YAW]", allow_negative_numbers = true, requires = "robot")]
     pub(crate) start: Option<String>,
+    /// With --robot: the walker plans on the true terrain instead of the LTM Manager's maps
+    /// (the scanner and the map still run), to tell a planner's failings from perception's.
+    #[arg(long, requires = "robot")]
+    pub(crate) ground_truth: bool,
     /// Then walk back to the start, using the maps made walking forward.
     #[arg(long, conflicts_with = "robot")]
     backward: bool,

@@ -18,7 +18,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use nalgebra::Point2;
-use tca_free_gait::{Action, FreeGait, GaitError, GaitParams, GaitState, LegGaitState, StepPlan};
+use tca_free_gait::{
+    Action, FreeGait, GaitError, GaitParams, GaitState, GridView, LegGaitState, StepPlan,
+};
 use tca_legged_messages::{
     BodyMove, BodyPose, HardwareFault, LegMove, LegState, LeggedWalk, MoveFailed, TipOver,
     WorldPoint,
@@ -28,9 +30,10 @@ use tca_legged_sim::{isometry_to_pose, pose_to_isometry};
 use tca_module::{
     ComputeTime, Connector, ConstraintSpec, Context, HandlerError, Module, ModuleError, TaskRef,
 };
+use tca_robot::HeightField;
 use tca_single_leg_messages::{MapKind, MapRegion, PlanePoint};
 
-use crate::map_view::MapView;
+use crate::map_view::{MapView, StepView};
 use crate::messages::{GaitStep, PlannedLeg, PlannedStart, StepPlanned};
 use crate::walks::{WalkState, Walks};
 
@@ -54,6 +57,9 @@ pub struct GaitModuleConfig {
     pub max_replans: u32,
     /// Stamp messages with simulated time and charge the planning to it.
     pub simulated_time: bool,
+    /// Plan on this true terrain instead of the LTM Manager's maps (to tell a planner's
+    /// failings from perception's); `None`: the maps.
+    pub ground_truth: Option<Arc<HeightField>>,
 }
 
 impl GaitModuleConfig {
@@ -68,6 +74,7 @@ impl GaitModuleConfig {
             map_cell_m,
             max_replans: 8,
             simulated_time: true,
+            ground_truth: None,
         }
     }
 }
@@ -235,7 +242,10 @@ impl Shared {
         })
     }
 
-    async fn maps(&self, ctx: &Context, centre: Point2<f64>) -> Result<MapView, HandlerError> {
+    async fn maps(&self, ctx: &Context, centre: Point2<f64>) -> Result<StepView, HandlerError> {
+        if let Some(truth) = &self.config.ground_truth {
+            return Ok(StepView::Truth(GridView::new(truth.clone())));
+        }
         let h = self.config.map_half_side_m;
         let polygon = [(-h, -h), (h, -h), (h, h), (-h, h)]
             .iter()
@@ -261,7 +271,9 @@ impl Shared {
                 refresh: false,
             })
             .await?;
-        MapView::new(&elevation, &footfall).map_err(HandlerError::new)
+        MapView::new(&elevation, &footfall)
+            .map(StepView::Map)
+            .map_err(HandlerError::new)
     }
 
     async fn step(&self, ctx: &Context, step: GaitStep) -> Result<(), HandlerError> {

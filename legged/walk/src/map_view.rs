@@ -2,7 +2,7 @@
 //! region, seen through the free gait's [`TerrainView`].
 
 use nalgebra::Point2;
-use tca_free_gait::TerrainView;
+use tca_free_gait::{GridView, TerrainView};
 use tca_single_leg_messages::{MapCell, MapGrid};
 
 /// What a map cell says.
@@ -140,6 +140,46 @@ impl TerrainView for MapView {
             }
         }
         Some(worst)
+    }
+}
+
+/// What a step is planned on: the LTM Manager's maps, or the true terrain.
+#[derive(Clone, Debug)]
+pub enum StepView {
+    /// The maps.
+    Map(MapView),
+    /// The true terrain.
+    Truth(GridView),
+}
+
+impl StepView {
+    /// The share of the terrain within `r` of `c` that is known (all of it, for the truth).
+    pub fn known_share(&self, c: Point2<f64>, r: f64) -> f64 {
+        match self {
+            StepView::Map(m) => m.known_share(c, r),
+            StepView::Truth(_) => 1.0,
+        }
+    }
+
+    fn view(&self) -> &dyn TerrainView {
+        match self {
+            StepView::Map(m) => m,
+            StepView::Truth(t) => t,
+        }
+    }
+}
+
+impl TerrainView for StepView {
+    fn height_at(&self, p: Point2<f64>) -> Option<f64> {
+        self.view().height_at(p)
+    }
+
+    fn max_height_in_disc(&self, c: Point2<f64>, r: f64) -> Option<f64> {
+        self.view().max_height_in_disc(c, r)
+    }
+
+    fn foothold_cost(&self, p: Point2<f64>, foot_radius_m: f64) -> Option<f64> {
+        self.view().foothold_cost(p, foot_radius_m)
     }
 }
 

@@ -31,6 +31,8 @@ pub struct LeggedSetup {
     pub start: StartPose,
     /// Seed of the scanner noise.
     pub seed: u64,
+    /// The walking module plans on the true terrain instead of the LTM Manager's maps.
+    pub ground_truth: bool,
 }
 
 impl LeggedSetup {
@@ -93,11 +95,12 @@ pub async fn connect_module(
             tca_ltm::connect(connector, config).await
         }
         "gait" => {
-            let config = GaitModuleConfig::new(
+            let mut config = GaitModuleConfig::new(
                 setup.model.clone(),
                 setup.map_half_side_m(),
                 setup.map_cell_m(),
             );
+            config.ground_truth = setup.ground_truth.then(|| setup.terrain.clone());
             crate::gait_module::connect(connector, config).await
         }
         other => Err(ModuleError::Usage(format!(

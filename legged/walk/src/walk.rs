@@ -44,6 +44,9 @@ pub struct LeggedWalkOptions {
     pub concurrent: bool,
     /// Seed of the scanner noise.
     pub seed: u64,
+    /// Plan on the true terrain instead of the LTM Manager's maps (the scanner and the map
+    /// still run): tells the free gait's failings from perception's.
+    pub ground_truth: bool,
     /// Where to write the log (`traffic.mcap`), the map picture (`map.png`) and the report
     /// (`report.json`).
     pub out: Option<PathBuf>,
@@ -60,6 +63,7 @@ impl LeggedWalkOptions {
             tolerance_m: None,
             concurrent: false,
             seed: 1,
+            ground_truth: false,
             out: None,
         }
     }
@@ -139,6 +143,7 @@ pub async fn walk(
             yaw_rad: start[2],
         },
         seed: options.seed,
+        ground_truth: options.ground_truth,
     };
     let describe = format!(
         "{} on {}, from ({:.2}, {:.2}) to ({:.2}, {:.2})",
@@ -245,11 +250,19 @@ pub async fn walk(
         states,
         robot: model.name().to_string(),
         terrain: loaded.describe,
-        mode: if options.concurrent {
-            "concurrent".into()
-        } else {
-            "sequential".into()
-        },
+        mode: format!(
+            "{}{}",
+            if options.concurrent {
+                "concurrent"
+            } else {
+                "sequential"
+            },
+            if options.ground_truth {
+                ", planned on the true terrain"
+            } else {
+                ""
+            }
+        ),
         start,
         goal,
         distance_to_goal_m,
