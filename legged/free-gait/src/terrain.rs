@@ -47,13 +47,19 @@ pub struct GridView {
 }
 
 impl GridView {
-    /// A view of a height field (slopes up to 35 degrees, departures up to 0.3 foot
-    /// radii).
+    /// The steepest slope a foot may stand on unless set otherwise: 35 degrees, radians.
+    pub const DEFAULT_MAX_SLOPE_RAD: f64 = 35.0 * std::f64::consts::PI / 180.0;
+    /// The largest departure from the tangent plane under a foot unless set otherwise, in
+    /// foot radii.
+    pub const DEFAULT_MAX_RESIDUAL: f64 = 0.3;
+
+    /// A view of a height field (slopes up to [`Self::DEFAULT_MAX_SLOPE_RAD`], departures up
+    /// to [`Self::DEFAULT_MAX_RESIDUAL`] foot radii).
     pub fn new(terrain: Arc<HeightField>) -> Self {
         GridView {
             terrain,
-            max_slope_rad: 35f64.to_radians(),
-            max_residual: 0.3,
+            max_slope_rad: Self::DEFAULT_MAX_SLOPE_RAD,
+            max_residual: Self::DEFAULT_MAX_RESIDUAL,
         }
     }
 

@@ -266,12 +266,20 @@ impl Shared {
         let footfall = ctx
             .query(&MapRegion {
                 kind: MapKind::Footfall,
+                polygon: polygon.clone(),
+                resolution_m,
+                refresh: false,
+            })
+            .await?;
+        let slope = ctx
+            .query(&MapRegion {
+                kind: MapKind::Slope,
                 polygon,
                 resolution_m,
                 refresh: false,
             })
             .await?;
-        MapView::new(&elevation, &footfall)
+        MapView::new(&elevation, &footfall, &slope)
             .map(StepView::Map)
             .map_err(HandlerError::new)
     }

@@ -1,9 +1,17 @@
-//! The terrain as the walker knows it: the LTM Manager's elevation and footfall maps of a
-//! region, seen through the free gait's [`TerrainView`].
+//! The terrain as the walker knows it: the LTM Manager's elevation, footfall and slope maps
+//! of a region, seen through the free gait's [`TerrainView`].
+//!
+//! A foothold's cost is judged as on the true terrain ([`GridView`]): the footfall map's
+//! deviation of the ground under the foot from its fitted plane, in foot radii, plus the
+//! tangent of the slope map's angle; a foothold deviating by more than `max_residual` foot
+//! radii or steeper than `max_slope_rad` is forbidden.
 
 use nalgebra::Point2;
 use tca_free_gait::{GridView, TerrainView};
 use tca_single_leg_messages::{MapCell, MapGrid};
+
+/// How far around a swing's disc, in cells, the ground seen bounds the unseen cells in it.
+const GAP_FILL_CELLS: f64 = 3.0;
 
 /// What a map cell says.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -63,6 +71,32 @@ impl Layer {
         (ix < self.nx && iy < self.ny).then_some((ix, iy))
     }
 
+    /// The value at `p` interpolated bilinearly between the four known cells around it; the
+    /// nearest cell's when one of them is not known.
+    fn interpolated(&self, p: Point2<f64>) -> Seen {
+        let fx = (p.x - self.origin.x) / self.cell;
+        let fy = (p.y - self.origin.y) / self.cell;
+        let (x0, y0) = (fx.floor(), fy.floor());
+        if x0 >= 0.0 && y0 >= 0.0 {
+            let (ix, iy) = (x0 as usize, y0 as usize);
+            if ix + 1 < self.nx && iy + 1 < self.ny {
+                let v = |i: usize, j: usize| match self.cells[j * self.nx + i] {
+                    Seen::Known(h) => Some(h),
+                    _ => None,
+                };
+                if let (Some(a), Some(b), Some(c), Some(d)) =
+                    (v(ix, iy), v(ix + 1, iy), v(ix, iy + 1), v(ix + 1, iy + 1))
+                {
+                    let (tx, ty) = (fx - x0, fy - y0);
+                    let low = a + (b - a) * tx;
+                    let high = c + (d - c) * tx;
+                    return Seen::Known(low + (high - low) * ty);
+                }
+            }
+        }
+        self.at(p)
+    }
+
     fn at(&self, p: Point2<f64>) -> Seen {
         self.index(p)
             .map_or(Seen::Unknown, |(ix, iy)| self.cells[iy * self.nx + ix])
@@ -89,15 +123,23 @@ impl Layer {
 pub struct MapView {
     elevation: Layer,
     footfall: Layer,
+    slope: Layer,
+    /// Steepest slope a foot may stand on, radians.
+    pub max_slope_rad: f64,
+    /// Largest departure of the ground under the foot from its fitted plane, in foot radii.
+    pub max_residual: f64,
 }
 
 impl MapView {
-    /// From an elevation and a footfall map; a malformed map is refused, saying what was
-    /// wrong.
-    pub fn new(elevation: &MapGrid, footfall: &MapGrid) -> Result<Self, String> {
+    /// From an elevation, a footfall and a slope map, judging footholds as [`GridView::new`]
+    /// does; a malformed map is refused, saying what was wrong.
+    pub fn new(elevation: &MapGrid, footfall: &MapGrid, slope: &MapGrid) -> Result<Self, String> {
         Ok(MapView {
             elevation: Layer::new(elevation)?,
             footfall: Layer::new(footfall)?,
+            slope: Layer::new(slope)?,
+            max_slope_rad: GridView::DEFAULT_MAX_SLOPE_RAD,
+            max_residual: GridView::DEFAULT_MAX_RESIDUAL,
         })
     }
 
@@ -111,35 +153,54 @@ impl MapView {
 
 impl TerrainView for MapView {
     fn height_at(&self, p: Point2<f64>) -> Option<f64> {
-        match self.elevation.at(p) {
+        match self.elevation.interpolated(p) {
             Seen::Known(h) => Some(h),
             _ => None,
         }
     }
 
     fn max_height_in_disc(&self, c: Point2<f64>, r: f64) -> Option<f64> {
-        // A hidden cell is bounded by what hides it: enough to keep a swing clear of it.
+        // A hidden cell is bounded by what hides it: enough to keep a swing clear of it. An
+        // unseen cell among seen ones (a gap between the scanner's samples, the floor of a
+        // narrow hollow) is taken as high as the highest ground seen around it; one with
+        // nothing seen around it makes the disc unknown.
         let mut best = f64::NEG_INFINITY;
+        let mut gaps = false;
         for s in self.elevation.disc(c, r) {
             match s {
                 Seen::Known(h) | Seen::AtMost(h) => best = best.max(h),
-                Seen::Unknown => return None,
+                Seen::Unknown => gaps = true,
             }
         }
-        Some(best)
+        if gaps {
+            let around = self.elevation.disc(c, r + GAP_FILL_CELLS * self.elevation.cell);
+            let seen = around
+                .iter()
+                .filter(|s| !matches!(s, Seen::Unknown))
+                .count();
+            if seen * 2 < around.len() {
+                return None;
+            }
+            for s in around {
+                if let Seen::Known(h) | Seen::AtMost(h) = s {
+                    best = best.max(h);
+                }
+            }
+        }
+        best.is_finite().then_some(best)
     }
 
     fn foothold_cost(&self, p: Point2<f64>, foot_radius_m: f64) -> Option<f64> {
-        // The footfall map is evaluated for the robot's foot; every cell under the foot's
-        // sole must be known, and the worst of them is the cost.
-        let mut worst: f64 = 0.0;
-        for s in self.footfall.disc(p, foot_radius_m * 0.5) {
-            match s {
-                Seen::Known(v) => worst = worst.max(v),
-                _ => return None,
-            }
+        // The footfall and slope maps are evaluated over the robot's foot at each cell.
+        let (Seen::Known(deviation_m), Seen::Known(slope)) = (self.footfall.at(p), self.slope.at(p))
+        else {
+            return None;
+        };
+        let relative = deviation_m / foot_radius_m.max(self.footfall.cell);
+        if relative > self.max_residual || slope > self.max_slope_rad {
+            return Some(f64::INFINITY);
         }
-        Some(worst)
+        Some(relative + slope.tan())
     }
 }
 
@@ -213,19 +274,33 @@ mod tests {
             _ => MapCell::Unknown,
         });
         let footfall = grid(MapKind::Footfall, |ix, _| match ix {
-            0..=4 => known(0.01),
+            0..=2 => known(0.01),
+            3 | 4 => known(0.05),
             _ => MapCell::Unknown,
         });
-        let v = MapView::new(&elevation, &footfall).expect("well-formed maps");
+        let slope = grid(MapKind::Slope, |ix, iy| match (ix, iy) {
+            (0..=4, 0) => known(0.7),
+            (0..=4, _) => known(0.1),
+            _ => MapCell::Unknown,
+        });
+        let v = MapView::new(&elevation, &footfall, &slope).expect("well-formed maps");
         assert_eq!(v.height_at(Point2::new(0.2, 0.5)), Some(0.2f32 as f64));
         assert_eq!(v.height_at(Point2::new(0.5, 0.5)), None);
         assert_eq!(v.max_height_in_disc(Point2::new(0.4, 0.5), 0.1), Some(0.9f32 as f64));
-        assert_eq!(v.max_height_in_disc(Point2::new(0.6, 0.5), 0.1), None);
-        assert!(v.foothold_cost(Point2::new(0.2, 0.5), 0.1).is_some());
+        // Unseen cells next to seen ones are bounded by the highest seen around them; a disc
+        // mostly unseen is unknown.
+        assert_eq!(v.max_height_in_disc(Point2::new(0.6, 0.5), 0.1), Some(0.9f32 as f64));
+        assert_eq!(v.max_height_in_disc(Point2::new(0.9, 0.5), 0.1), None);
+        // 1 cm off the plane under a 0.1 m foot on a 0.1 rad slope.
+        let cost = v.foothold_cost(Point2::new(0.2, 0.5), 0.1).expect("known");
+        assert!((cost - (0.01f32 as f64 / 0.1 + (0.1f32 as f64).tan())).abs() < 1e-9);
+        // 5 cm off the plane is half a foot radius: forbidden, as is a 40° slope.
+        assert_eq!(v.foothold_cost(Point2::new(0.3, 0.5), 0.1), Some(f64::INFINITY));
+        assert_eq!(v.foothold_cost(Point2::new(0.1, 0.0), 0.1), Some(f64::INFINITY));
         assert_eq!(v.foothold_cost(Point2::new(0.5, 0.5), 0.1), None);
         assert_eq!(v.height_at(Point2::new(-3.0, 0.5)), None);
         let mut bad = elevation.clone();
         bad.cells.pop();
-        assert!(MapView::new(&bad, &footfall).unwrap_err().contains("malformed"));
+        assert!(MapView::new(&bad, &footfall, &slope).unwrap_err().contains("malformed"));
     }
 }
