@@ -1101,6 +1101,9 @@ impl FreeGait {
         let at = |t: f64| -> Vec<f64> { a.iter().zip(b).map(|(x, y)| x + (y - x) * t).collect() };
         let mut q = posture.to_vec();
         let start = if kind == Segment::Lift { 0 } else { 1 };
+        // A foot lifting starts where it stands, which a map with noise may put a little in
+        // the ground: it must not go deeper than it starts.
+        let mut lift_floor = -0.25 * p.clearance_m;
         for k in start..=n {
             let t = k as f64 / n as f64;
             let joints = at(t);
@@ -1108,8 +1111,13 @@ impl FreeGait {
             let clearance = sphere_clearance(terrain, &centre, r);
             match kind {
                 Segment::Lift => {
+                    if k == 0
+                        && let Some(c) = clearance
+                    {
+                        lift_floor = lift_floor.min(c - 0.25 * p.clearance_m);
+                    }
                     if let Some(c) = clearance
-                        && c < -0.25 * p.clearance_m
+                        && c < lift_floor
                     {
                         return Err(format!("leg `{}` would drag its foot lifting", info.name));
                     }

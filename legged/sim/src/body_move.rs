@@ -67,6 +67,7 @@ impl LeggedSim {
         let n = (((dp + angle * extent) / self.params.collision_step_m).ceil() as usize)
             .clamp(1, 100_000);
         let support = self.support(&self.stance);
+        let tol = self.params.contact_tolerance_m;
         let unstable = |margin: f64, min: f64| MoveError::Unstable {
             command: CMD,
             leg: None,
@@ -94,12 +95,18 @@ impl LeggedSim {
                     continue;
                 }
                 let foot = inverse * self.anchors[i];
+                // A standing foot held within the contact tolerance of where it stands is
+                // held: a planner's solution at the edge of the workspace then holds here too.
+                let tolerance_m = IkOptions::default().tolerance_m.max(tol);
                 let mut options = IkOptions::starting_at(&posture[i]);
                 options.random_starts = 0;
+                options.tolerance_m = tolerance_m;
                 let solution = leg
                     .inverse_kinematics(&foot, &options)
                     .or_else(|_| {
-                        leg.inverse_kinematics(&foot, &IkOptions::starting_at(&posture[i]))
+                        let mut options = IkOptions::starting_at(&posture[i]);
+                        options.tolerance_m = tolerance_m;
+                        leg.inverse_kinematics(&foot, &options)
                     })
                     .map_err(|e| MoveError::JointLimit {
                         command: CMD,
@@ -145,7 +152,6 @@ impl LeggedSim {
             contact: None,
         };
         self.counters.moves += 1;
-        let tol = self.params.contact_tolerance_m;
         for p in plan {
             report.samples += 1;
             let mut hits = self.link_contacts(&p.body, &p.posture, None);
