@@ -40,7 +40,9 @@ pub(crate) async fn run(command: CourseCommand) -> anyhow::Result<ExitCode> {
     match command {
         CourseCommand::List(args) => {
             for course in Course::ALL {
-                let c = course.build(args.seed).map_err(|e| anyhow::anyhow!("{e}"))?;
+                let c = course
+                    .build(args.seed)
+                    .map_err(|e| anyhow::anyhow!("{e}"))?;
                 let (lo, hi) = c.terrain.extent();
                 println!(
                     "{:<14} for {:<8} X {:.1}..{:.1} m, Y {:.1}..{:.1} m, heights {:.2}..{:.2} m; start ({:.2}, {:.2}), goal ({:.2}, {:.2})",

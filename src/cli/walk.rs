@@ -37,7 +37,12 @@ pub(crate) struct WalkArgs {
     pub(crate) goal: Option<String>,
     /// With --robot: where the body starts, X,Y[,YAW] in world metres and radians
     /// (default: the course's start, or near a terrain file's west edge, facing east).
-    #[arg(long, value_name = "X,Y[,YAW]", allow_negative_numbers = true, requires = "robot")]
+    #[arg(
+        long,
+        value_name = "X,Y[,YAW]",
+        allow_negative_numbers = true,
+        requires = "robot"
+    )]
     pub(crate) start: Option<String>,
     /// With --robot: the walker plans on the true terrain instead of the LTM Manager's maps
     /// (the scanner and the map still run), to tell a planner's failings from perception's.
@@ -124,10 +129,11 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
             WalkMode::Sequential
         },
         seed: args.seed,
-        out: args
-            .connect
-            .is_none()
-            .then(|| args.out.clone().unwrap_or_else(|| PathBuf::from("out/walk"))),
+        out: args.connect.is_none().then(|| {
+            args.out
+                .clone()
+                .unwrap_or_else(|| PathBuf::from("out/walk"))
+        }),
         step_pictures: args.pictures,
         connect: args.connect.clone(),
         compute: args.compute.into(),

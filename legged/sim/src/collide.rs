@@ -291,11 +291,30 @@ pub(crate) fn foot_clearance(terrain: &HeightField, c: &Point3<f64>, r: f64) -> 
 
 /// The height of a foot sphere's centre resting on the terrain above `xy`.
 pub(crate) fn rest_height(terrain: &HeightField, xy: Point2<f64>, r: f64) -> f64 {
-    let mut best = terrain.height_at(xy.x, xy.y) + r;
+    resting(terrain, xy, r).0
+}
+
+/// Where a foot sphere of radius `r` lowered onto the terrain above `xy` touches it: the
+/// terrain point under the sphere that holds it highest (on a level patch the point under
+/// its centre; on a step's edge, the edge).
+pub(crate) fn touch_point(terrain: &HeightField, xy: Point2<f64>, r: f64) -> Point3<f64> {
+    resting(terrain, xy, r).1
+}
+
+/// The resting height of the sphere's centre and the terrain point that holds it there.
+fn resting(terrain: &HeightField, xy: Point2<f64>, r: f64) -> (f64, Point3<f64>) {
+    let h = terrain.height_at(xy.x, xy.y);
+    let mut best = (h + r, Point3::new(xy.x, xy.y, h));
     if r <= 0.0 {
         return best;
     }
     let lift = |d2: f64| (r * r - d2).max(0.0).sqrt();
+    let mut consider = |x: f64, y: f64, ground: f64, d2: f64| {
+        let centre = ground + lift(d2);
+        if centre > best.0 {
+            best = (centre, Point3::new(x, y, ground));
+        }
+    };
     for ring in 1..=3 {
         let rr = r * ring as f64 / 3.0;
         let count = 8 * ring;
@@ -303,7 +322,7 @@ pub(crate) fn rest_height(terrain: &HeightField, xy: Point2<f64>, r: f64) -> f64
             let a = std::f64::consts::TAU * k as f64 / count as f64;
             let (s, co) = a.sin_cos();
             let (x, y) = (xy.x + rr * co, xy.y + rr * s);
-            best = best.max(terrain.height_at(x, y) + lift(rr * rr));
+            consider(x, y, terrain.height_at(x, y), rr * rr);
         }
     }
     let g = terrain.grid();
@@ -311,11 +330,11 @@ pub(crate) fn rest_height(terrain: &HeightField, xy: Point2<f64>, r: f64) -> f64
     let res = g.resolution_m();
     for iy in ys {
         for ix in xs.clone() {
-            let dx = g.origin().x + ix as f64 * res - xy.x;
-            let dy = g.origin().y + iy as f64 * res - xy.y;
-            let d2 = dx * dx + dy * dy;
+            let x = g.origin().x + ix as f64 * res;
+            let y = g.origin().y + iy as f64 * res;
+            let d2 = (x - xy.x).powi(2) + (y - xy.y).powi(2);
             if d2 <= r * r {
-                best = best.max(g.cells()[iy * g.nx() + ix] + lift(d2));
+                consider(x, y, g.cells()[iy * g.nx() + ix], d2);
             }
         }
     }

@@ -256,7 +256,24 @@ impl LeggedSim {
         self.last.as_ref()
     }
 
-    /// The robot's state as the `legged.supportState` inform reports it.
+    /// Where a standing foot touches the terrain, world frame: the terrain point that holds
+    /// its sphere up (the bottom of the sphere on level ground, the edge on a step); for a
+    /// foot in the air, the bottom of its sphere ([`Self::contact_point`]).
+    pub fn touch_point(&self, leg: usize) -> Option<Point3<f64>> {
+        let bottom = self.contact_point(leg)?;
+        if !self.stance.get(leg).copied().unwrap_or(false) {
+            return Some(bottom);
+        }
+        let r = self.model.legs().get(leg)?.foot_radius();
+        Some(crate::collide::touch_point(
+            &self.terrain,
+            nalgebra::Point2::new(bottom.x, bottom.y),
+            r,
+        ))
+    }
+
+    /// The robot's state as the `legged.supportState` inform reports it: every standing
+    /// foot at the terrain point it touches ([`Self::touch_point`]).
     pub fn support_state(&self) -> SupportState {
         let feet = self
             .model
@@ -265,7 +282,7 @@ impl LeggedSim {
             .enumerate()
             .map(|(i, leg)| FootState {
                 leg: leg.name().to_owned(),
-                at: world_point(&self.contact_point(i).unwrap_or_else(Point3::origin)),
+                at: world_point(&self.touch_point(i).unwrap_or_else(Point3::origin)),
                 stance: self.stance[i],
             })
             .collect();
@@ -325,13 +342,23 @@ impl LeggedSim {
     }
 
     /// The support polygon of the feet marked standing, from their anchors.
+    /// The support polygon of the feet marked in `stance`: the terrain points their
+    /// spheres touch (the point under the centre on level ground).
     pub(crate) fn support(&self, stance: &[bool]) -> Polygon {
         let feet: Vec<Point2<f64>> = self
             .anchors
             .iter()
+            .zip(self.model.legs())
             .zip(stance)
             .filter(|(_, s)| **s)
-            .map(|(p, _)| Point2::new(p.x, p.y))
+            .map(|((p, leg), _)| {
+                let t = crate::collide::touch_point(
+                    &self.terrain,
+                    Point2::new(p.x, p.y),
+                    leg.foot_radius(),
+                );
+                Point2::new(t.x, t.y)
+            })
             .collect();
         support_polygon(&feet)
     }

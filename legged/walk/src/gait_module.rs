@@ -88,7 +88,10 @@ struct Shared {
 }
 
 /// Connects the walking module and serves `legged.walk` until the module is closed.
-pub async fn connect(connector: &Connector, config: GaitModuleConfig) -> Result<Module, ModuleError> {
+pub async fn connect(
+    connector: &Connector,
+    config: GaitModuleConfig,
+) -> Result<Module, ModuleError> {
     if !(config.map_half_side_m > 0.0 && config.map_cell_m > 0.0) {
         return Err(ModuleError::Config(format!(
             "the walking module's map must have a positive size and cell (got {} m and {} m)",
@@ -205,9 +208,18 @@ impl Shared {
         ctx.on_exception::<HardwareFault>(node).await?;
         self.walks.insert(
             node,
-            WalkState::new([walk.goal_x_m, walk.goal_y_m], walk.tolerance_m, walk.concurrent),
+            WalkState::new(
+                [walk.goal_x_m, walk.goal_y_m],
+                walk.tolerance_m,
+                walk.concurrent,
+            ),
         );
-        tracing::info!(x = walk.goal_x_m, y = walk.goal_y_m, concurrent = walk.concurrent, "legged walk started");
+        tracing::info!(
+            x = walk.goal_x_m,
+            y = walk.goal_y_m,
+            concurrent = walk.concurrent,
+            "legged walk started"
+        );
         ctx.goal(&GaitStep {
             step: 1,
             goal_x_m: walk.goal_x_m,
@@ -363,7 +375,11 @@ impl Shared {
                         .legs()
                         .get(*leg)
                         .map(|l| l.name().to_string())
-                        .ok_or_else(|| HandlerError::new(format!("the plan names leg {leg}, which the robot does not have")))?;
+                        .ok_or_else(|| {
+                            HandlerError::new(format!(
+                                "the plan names leg {leg}, which the robot does not have"
+                            ))
+                        })?;
                     footholds.push((name.clone(), to_world(foothold)));
                     ctx.send_task(
                         &LegMove {
@@ -409,7 +425,10 @@ impl Shared {
             (Some(last), false) => (
                 None,
                 None,
-                Some(ConstraintSpec::delay_planning(last.task_ref(), TaskRef::This)),
+                Some(ConstraintSpec::delay_planning(
+                    last.task_ref(),
+                    TaskRef::This,
+                )),
             ),
             // Nothing to move: look again from where the robot is.
             (None, _) => (None, step.after, None),

@@ -173,7 +173,9 @@ impl TerrainView for MapView {
             }
         }
         if gaps {
-            let around = self.elevation.disc(c, r + GAP_FILL_CELLS * self.elevation.cell);
+            let around = self
+                .elevation
+                .disc(c, r + GAP_FILL_CELLS * self.elevation.cell);
             let seen = around
                 .iter()
                 .filter(|s| !matches!(s, Seen::Unknown))
@@ -192,7 +194,8 @@ impl TerrainView for MapView {
 
     fn foothold_cost(&self, p: Point2<f64>, foot_radius_m: f64) -> Option<f64> {
         // The footfall and slope maps are evaluated over the robot's foot at each cell.
-        let (Seen::Known(deviation_m), Seen::Known(slope)) = (self.footfall.at(p), self.slope.at(p))
+        let (Seen::Known(deviation_m), Seen::Known(slope)) =
+            (self.footfall.at(p), self.slope.at(p))
         else {
             return None;
         };
@@ -267,10 +270,15 @@ mod tests {
 
     #[test]
     fn unknown_cells_are_never_footholds_and_hidden_ones_bound_clearance() {
-        let known = |v: f32| MapCell::Known { value: v, sigma_m: 0.01 };
+        let known = |v: f32| MapCell::Known {
+            value: v,
+            sigma_m: 0.01,
+        };
         let elevation = grid(MapKind::Elevation, |ix, _| match ix {
             0..=4 => known(0.2),
-            5 => MapCell::Occluded { max_elevation_m: 0.9 },
+            5 => MapCell::Occluded {
+                max_elevation_m: 0.9,
+            },
             _ => MapCell::Unknown,
         });
         let footfall = grid(MapKind::Footfall, |ix, _| match ix {
@@ -286,21 +294,37 @@ mod tests {
         let v = MapView::new(&elevation, &footfall, &slope).expect("well-formed maps");
         assert_eq!(v.height_at(Point2::new(0.2, 0.5)), Some(0.2f32 as f64));
         assert_eq!(v.height_at(Point2::new(0.5, 0.5)), None);
-        assert_eq!(v.max_height_in_disc(Point2::new(0.4, 0.5), 0.1), Some(0.9f32 as f64));
+        assert_eq!(
+            v.max_height_in_disc(Point2::new(0.4, 0.5), 0.1),
+            Some(0.9f32 as f64)
+        );
         // Unseen cells next to seen ones are bounded by the highest seen around them; a disc
         // mostly unseen is unknown.
-        assert_eq!(v.max_height_in_disc(Point2::new(0.5, 0.5), 0.1), Some(0.9f32 as f64));
+        assert_eq!(
+            v.max_height_in_disc(Point2::new(0.5, 0.5), 0.1),
+            Some(0.9f32 as f64)
+        );
         assert_eq!(v.max_height_in_disc(Point2::new(0.9, 0.5), 0.1), None);
         // 1 cm off the plane under a 0.1 m foot on a 0.1 rad slope.
         let cost = v.foothold_cost(Point2::new(0.2, 0.5), 0.1).expect("known");
         assert!((cost - (0.01f32 as f64 / 0.1 + (0.1f32 as f64).tan())).abs() < 1e-9);
         // 5 cm off the plane is half a foot radius: forbidden, as is a 40° slope.
-        assert_eq!(v.foothold_cost(Point2::new(0.3, 0.5), 0.1), Some(f64::INFINITY));
-        assert_eq!(v.foothold_cost(Point2::new(0.1, 0.0), 0.1), Some(f64::INFINITY));
+        assert_eq!(
+            v.foothold_cost(Point2::new(0.3, 0.5), 0.1),
+            Some(f64::INFINITY)
+        );
+        assert_eq!(
+            v.foothold_cost(Point2::new(0.1, 0.0), 0.1),
+            Some(f64::INFINITY)
+        );
         assert_eq!(v.foothold_cost(Point2::new(0.5, 0.5), 0.1), None);
         assert_eq!(v.height_at(Point2::new(-3.0, 0.5)), None);
         let mut bad = elevation.clone();
         bad.cells.pop();
-        assert!(MapView::new(&bad, &footfall, &slope).unwrap_err().contains("malformed"));
+        assert!(
+            MapView::new(&bad, &footfall, &slope)
+                .unwrap_err()
+                .contains("malformed")
+        );
     }
 }

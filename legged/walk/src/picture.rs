@@ -32,12 +32,19 @@ pub fn map_picture(terrain: &HeightField, report: &LeggedWalkReport) -> Canvas {
     let scale = MAP_PX / w_m.max(h_m);
     let (w, h) = ((w_m * scale).ceil() as u32, (h_m * scale).ceil() as u32);
     let mut c = Canvas::new(w.max(200), h + LEGEND_PX, [255, 255, 255]);
-    let (zmin, zmax) = (terrain.min_height_m(), terrain.max_height_m().max(terrain.min_height_m() + 1e-6));
+    let (zmin, zmax) = (
+        terrain.min_height_m(),
+        terrain.max_height_m().max(terrain.min_height_m() + 1e-6),
+    );
     for py in 0..h {
         for px in 0..w {
             let x = lo.x + (f64::from(px) + 0.5) / scale;
             let y = hi.y - (f64::from(py) + 0.5) / scale;
-            c.set(i64::from(px), i64::from(py), grey(terrain.height_at(x, y), zmin, zmax));
+            c.set(
+                i64::from(px),
+                i64::from(py),
+                grey(terrain.height_at(x, y), zmin, zmax),
+            );
         }
     }
     let to_px = |x: f64, y: f64| ((x - lo.x) * scale, (hi.y - y) * scale);
@@ -48,7 +55,12 @@ pub fn map_picture(terrain: &HeightField, report: &LeggedWalkReport) -> Canvas {
             legs.push(leg);
             legs.len() - 1
         });
-        c.circle(to_px(p[0], p[1]), 3.0, 2, LEG_COLOURS[i % LEG_COLOURS.len()]);
+        c.circle(
+            to_px(p[0], p[1]),
+            3.0,
+            2,
+            LEG_COLOURS[i % LEG_COLOURS.len()],
+        );
     }
     for pair in report.states.windows(2) {
         let (a, b) = (&pair[0].body, &pair[1].body);
@@ -58,7 +70,11 @@ pub fn map_picture(terrain: &HeightField, report: &LeggedWalkReport) -> Canvas {
     c.marker(to_px(report.goal[0], report.goal[1]), 5, GOAL);
     // Legend.
     let y0 = i64::from(h) + 8;
-    let status = if report.reached { "reached" } else { "not reached" };
+    let status = if report.reached {
+        "reached"
+    } else {
+        "not reached"
+    };
     c.text(
         8,
         y0,

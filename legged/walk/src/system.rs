@@ -4,10 +4,10 @@
 
 use std::sync::Arc;
 
+use tca_ism::{BodyDimensions, IsmConfig};
 use tca_legged_controller::LeggedControllerConfig;
 use tca_legged_model::RobotModel;
 use tca_legged_sim::{SimParams, StartPose};
-use tca_ism::{BodyDimensions, IsmConfig};
 use tca_ltm::LtmConfig;
 use tca_module::{ComputeTime, Connector, Module, ModuleError};
 use tca_robot::HeightField;

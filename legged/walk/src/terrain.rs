@@ -39,7 +39,11 @@ pub struct LoadedTerrain {
 impl LeggedTerrain {
     /// The course a robot walks when none is given: its own scale's rough ground.
     pub fn default_for(model: &RobotModel, seed: u64) -> Self {
-        let name = if max_reach(model) < 0.6 { "hexapod-rough" } else { "rough" };
+        let name = if max_reach(model) < 0.6 {
+            "hexapod-rough"
+        } else {
+            "rough"
+        };
         LeggedTerrain::Course {
             name: name.into(),
             seed,
@@ -133,5 +137,9 @@ pub fn footprint_radius(model: &RobotModel) -> f64 {
 
 /// The longest leg's reach bound, metres.
 pub fn max_reach(model: &RobotModel) -> f64 {
-    model.legs().iter().map(|l| l.reach_bound()).fold(0.0, f64::max)
+    model
+        .legs()
+        .iter()
+        .map(|l| l.reach_bound())
+        .fold(0.0, f64::max)
 }

@@ -83,7 +83,8 @@ pub enum Progress {
 
 /// The robot's description and its URDF text.
 pub fn load_robot(name_or_path: &str) -> anyhow::Result<(RobotModel, String)> {
-    let model = RobotModel::load(name_or_path).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let model = RobotModel::load(name_or_path)
+        .map_err(|e| anyhow::anyhow!("cannot use the robot {name_or_path}: {e}"))?;
     let urdf = match BUILTIN_ROBOTS.iter().find(|r| r.name == name_or_path) {
         Some(r) => r.urdf.to_string(),
         None => std::fs::read_to_string(name_or_path)
@@ -118,17 +119,30 @@ pub async fn walk(
     let reach = footprint_radius(&model);
     let (lo, hi) = field.extent();
     let mid_y = 0.5 * (lo.y + hi.y);
-    let start = options
-        .start
-        .or(loaded.start)
-        .unwrap_or([lo.x + reach + 0.05 * (hi.x - lo.x).min(1.0), mid_y, 0.0]);
+    let start = options.start.or(loaded.start).unwrap_or([
+        lo.x + reach + 0.05 * (hi.x - lo.x).min(1.0),
+        mid_y,
+        0.0,
+    ]);
     let goal = options
         .goal
         .or(loaded.goal.map(|g| [g.x, g.y]))
         .unwrap_or([hi.x - reach - 0.05 * (hi.x - lo.x).min(1.0), mid_y]);
-    check_place("start", Point2::new(start[0], start[1]), start[2], &field, &model)?;
+    check_place(
+        "start",
+        Point2::new(start[0], start[1]),
+        start[2],
+        &field,
+        &model,
+    )?;
     let heading = (goal[1] - start[1]).atan2(goal[0] - start[0]);
-    check_place("goal", Point2::new(goal[0], goal[1]), heading, &field, &model)?;
+    check_place(
+        "goal",
+        Point2::new(goal[0], goal[1]),
+        heading,
+        &field,
+        &model,
+    )?;
     let tolerance_m = options.tolerance_m.unwrap_or(params.goal_tolerance_m);
     if !(tolerance_m > 0.0 && tolerance_m.is_finite()) {
         anyhow::bail!("the goal tolerance {tolerance_m} m must be a positive distance");
@@ -280,7 +294,10 @@ pub async fn walk(
     for m in modules {
         m.close().await;
     }
-    central.shutdown().await.context("central did not shut down cleanly")?;
+    central
+        .shutdown()
+        .await
+        .context("central did not shut down cleanly")?;
     report.wall_time_s = started.elapsed().as_secs_f64();
     if let Some(dir) = &options.out {
         if let Some(log) = log_path {

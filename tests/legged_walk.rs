@@ -1,0 +1,287 @@
+//! Multi-legged walks on the bus, whole: the simulated Controller, the body-mounted scanner,
+//! the LTM Manager's map and the free gait in one process, driven by one `legged.walk`.
+//! Every report's states are checked against the terrain from the report's numbers alone.
+
+use std::process::{Command, Stdio};
+
+use tca_legged_walk::{LeggedTerrain, LeggedWalkOptions, LeggedWalkReport, check_states};
+use tca_robot::HeightField;
+use tokio::sync::mpsc;
+
+fn course_terrain(name: &str, seed: u64) -> HeightField {
+    tca_legged_courses::Course::builtin(name, seed)
+        .expect("a built-in course")
+        .terrain
+}
+
+async fn walk(options: LeggedWalkOptions) -> LeggedWalkReport {
+    let (tx, _rx) = mpsc::unbounded_channel();
+    tca_legged_walk::walk(&options, tx)
+        .await
+        .expect("the walk runs")
+}
+
+/// Asserts a walk reached its goal safely and that every recorded state is consistent.
+fn assert_safe_arrival(report: &LeggedWalkReport, terrain: &HeightField) {
+    print!("{}", report.summary());
+    assert!(report.reached, "{:?}", report.reason);
+    assert_safe(report, terrain);
+}
+
+fn assert_safe(report: &LeggedWalkReport, terrain: &HeightField) {
+    assert_eq!(report.falls, 0, "{}", report.summary());
+    assert_eq!(report.collisions, 0, "{}", report.summary());
+    let least = report.min_stability_margin_m.expect("states were recorded");
+    assert!(least > 0.0, "least margin {least}");
+    assert!(
+        report.states.len() > report.steps,
+        "a state per support change"
+    );
+    let problems = check_states(&report.states, terrain);
+    assert!(problems.is_empty(), "{problems:?}");
+    assert!(report.sim_time_s > 0.0);
+}
+
+fn options(robot: &str, course: &str, seed: u64) -> LeggedWalkOptions {
+    LeggedWalkOptions {
+        terrain: Some(LeggedTerrain::Course {
+            name: course.into(),
+            seed,
+        }),
+        seed,
+        ..LeggedWalkOptions::new(robot)
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_ambler_crosses_the_boulder_field_on_its_own_map() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let report = walk(LeggedWalkOptions {
+        out: Some(dir.path().to_path_buf()),
+        ..options("ambler", "boulders", 1)
+    })
+    .await;
+    assert_safe_arrival(&report, &course_terrain("boulders", 1));
+    assert!(report.steps >= 30, "20 m in steps of at most 0.6 m");
+    for file in ["traffic.mcap", "map.png", "report.json"] {
+        assert!(dir.path().join(file).is_file(), "{file} written");
+    }
+    let written: LeggedWalkReport = serde_json::from_slice(
+        &std::fs::read(dir.path().join("report.json")).expect("report.json"),
+    )
+    .expect("report.json is a report");
+    assert_eq!(written.states, report.states);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_ambler_climbs_the_slope_on_its_own_map() {
+    let report = walk(options("ambler", "slope", 3)).await;
+    assert_safe_arrival(&report, &course_terrain("slope", 3));
+    let top = report
+        .states
+        .iter()
+        .map(|s| s.body[2])
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        top > 2.0,
+        "the body climbed onto the 2 m plateau (top {top:.2} m)"
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_ambler_crosses_the_ditch_planning_on_the_true_terrain() {
+    let report = walk(LeggedWalkOptions {
+        ground_truth: true,
+        ..options("ambler", "ditch", 1)
+    })
+    .await;
+    assert_safe_arrival(&report, &course_terrain("ditch", 1));
+    assert!(report.mode.contains("true terrain"), "{}", report.mode);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_hexapod_walks_its_rough_course_planning_on_the_true_terrain() {
+    let report = walk(LeggedWalkOptions {
+        ground_truth: true,
+        ..options("hexapod", "hexapod-rough", 1)
+    })
+    .await;
+    assert_safe_arrival(&report, &course_terrain("hexapod-rough", 1));
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_athlete_stands_and_takes_steps_on_rough_ground() {
+    let report = walk(LeggedWalkOptions {
+        ground_truth: true,
+        goal: Some([9.0, 0.0]),
+        ..options("athlete", "rough", 1)
+    })
+    .await;
+    print!("{}", report.summary());
+    assert!(report.steps >= 12, "{}", report.summary());
+    assert_safe(&report, &course_terrain("rough", 1));
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_impossible_goal_ends_with_the_reason_and_no_fall() {
+    // A chasm 5 m wide and 3 m deep across the whole terrain at x = 12..17 m.
+    let flat = course_terrain("flat", 1);
+    let (lo, _) = flat.extent();
+    let grid = flat.grid();
+    let (nx, ny, cell) = (grid.nx(), grid.ny(), grid.resolution_m());
+    let heights = (0..ny)
+        .flat_map(|_| (0..nx).map(move |ix| lo.x + ix as f64 * cell))
+        .map(|x| if (12.0..17.0).contains(&x) { -3.0 } else { 0.0 })
+        .collect();
+    let chasm = HeightField::new(lo, cell, nx, ny, heights).expect("a terrain");
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let file = dir.path().join("chasm.asc");
+    tca_robot::terrain::asc::write_height_field(&file, &chasm).expect("written");
+    let report = walk(LeggedWalkOptions {
+        terrain: Some(LeggedTerrain::File(file)),
+        start: Some([3.0, 0.0, 0.0]),
+        goal: Some([23.0, 0.0]),
+        ..LeggedWalkOptions::new("ambler")
+    })
+    .await;
+    print!("{}", report.summary());
+    assert!(!report.reached);
+    let reason = report.reason.clone().expect("a reason");
+    assert!(
+        reason.contains("step") || reason.contains("goal"),
+        "{reason}"
+    );
+    assert_safe(&report, &chasm);
+    assert!(report.states.iter().all(|s| s.body[0] < 12.0));
+}
+
+fn tca(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_tca"))
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("tca runs")
+}
+
+/// `tca course write`, then `tca walk --robot FILE.urdf --terrain FILE.asc --json`: an
+/// eight-legged description written for this test walks with no change to the code, and
+/// the JSON summary has the fields other tools check walks by.
+#[test]
+fn an_eight_legged_description_walks_flat_and_rough_ground_from_the_command_line() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let robot = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/robots/octopod.urdf");
+    for course in ["hexapod-flat", "hexapod-rough"] {
+        let asc = dir.path().join(format!("{course}.asc"));
+        let asc_text = asc.to_string_lossy().into_owned();
+        let out = tca(&["course", "write", course, &asc_text, "--seed", "2"]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let out_dir = dir.path().join(course).to_string_lossy().into_owned();
+        let out = tca(&[
+            "walk",
+            "--robot",
+            robot,
+            "--terrain",
+            &asc_text,
+            "--start",
+            "0.6,0",
+            "--goal",
+            "2.9,0",
+            "--ground-truth",
+            "--out",
+            &out_dir,
+            "--json",
+        ]);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{stdout}\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let json: serde_json::Value =
+            serde_json::from_str(stdout.lines().last().expect("a JSON line")).expect("JSON");
+        for field in [
+            "reached",
+            "reason",
+            "steps",
+            "falls",
+            "collisions",
+            "min_stability_margin_m",
+            "sim_time_s",
+            "wall_time_s",
+            "planning_ms_per_step",
+            "states",
+        ] {
+            assert!(json.get(field).is_some(), "{field} in the summary");
+        }
+        assert_eq!(json["reached"], true);
+        let state = &json["states"][0];
+        assert_eq!(state["body"].as_array().map(Vec::len), Some(6));
+        assert_eq!(state["com"].as_array().map(Vec::len), Some(3));
+        assert!(state["t_s"].is_number());
+        let feet = state["feet"].as_object().expect("feet by leg name");
+        assert_eq!(feet.len(), 8);
+        for name in ["left_1", "right_4"] {
+            assert_eq!(feet[name]["at"].as_array().map(Vec::len), Some(3));
+            assert!(feet[name]["stance"].is_boolean());
+        }
+        let report: LeggedWalkReport = serde_json::from_value(json).expect("a report");
+        let terrain = course_terrain(course, 2);
+        assert_safe(&report, &terrain);
+    }
+}
+
+#[test]
+fn bad_robots_terrains_starts_and_goals_are_refused_with_what_to_do() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let not_urdf = dir.path().join("robot.urdf");
+    std::fs::write(&not_urdf, "this is not a robot").expect("written");
+    let not_urdf = not_urdf.to_string_lossy().into_owned();
+    let bad_asc = dir.path().join("bad.asc");
+    std::fs::write(&bad_asc, "ncols 3\nnrows two\n").expect("written");
+    let bad_asc = bad_asc.to_string_lossy().into_owned();
+    let cases: &[(&[&str], &str)] = &[
+        (&["walk", "--robot", "centipede"], "ambler"),
+        (&["walk", "--robot", &not_urdf], "robot.urdf"),
+        (
+            &["walk", "--robot", "ambler", "--course", "moon"],
+            "boulders",
+        ),
+        (
+            &["walk", "--robot", "ambler", "--terrain", &bad_asc],
+            "ESRI ASCII",
+        ),
+        (
+            &["walk", "--robot", "ambler", "--terrain", "/no/such.asc"],
+            "/no/such.asc",
+        ),
+        (
+            &["walk", "--robot", "ambler", "--start", "0.5,0"],
+            "too near the edge",
+        ),
+        (
+            &["walk", "--robot", "ambler", "--goal", "40,0"],
+            "too near the edge",
+        ),
+        (&["walk", "--robot", "ambler", "--goal", "north"], "X,Y"),
+        (
+            &["walk", "--robot", "ambler", "--start", "3,0,1,2"],
+            "X,Y,YAW",
+        ),
+        (&["walk", "--robot", "ambler", "--start", "3,nan"], "finite"),
+        (&["walk", "--goal", "3,4"], "--robot"),
+        (&["course", "write", "moon", "x.asc"], "boulders"),
+    ];
+    for (args, needle) in cases {
+        let out = tca(args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} was accepted");
+        assert!(stderr.contains(needle), "{args:?}: {stderr}");
+        assert!(!stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+    let out = tca(&["walk", "--start", "3,0"]);
+    assert!(!out.status.success(), "--start without --robot");
+}
