@@ -62,8 +62,23 @@ pub struct GaitModuleConfig {
     pub ground_truth: Option<Arc<HeightField>>,
 }
 
+/// Allowance for a perceived map's height error, metres: twice it (1 cm) is about the 95th
+/// percentile of the LTM Manager's error with the Perceptron (0.6 to 1.1 cm over the cells
+/// it knows).
+pub const MAP_HEIGHT_ERROR_M: f64 = 0.005;
+
 impl GaitModuleConfig {
-    /// The defaults for a robot.
+    /// The free gait's clearance of the ground and the depth a swing reaches below its
+    /// foothold widened to at least twice [`MAP_HEIGHT_ERROR_M`], so that a small robot
+    /// planning on a perceived map neither brushes the ground nor stops short of it.
+    pub fn with_map_allowance(mut self) -> Self {
+        let p = &mut self.params;
+        p.clearance_m = p.clearance_m.max(2.0 * MAP_HEIGHT_ERROR_M);
+        p.below_foothold_m = p.below_foothold_m.max(2.0 * MAP_HEIGHT_ERROR_M);
+        self
+    }
+
+    /// The defaults for a robot: the free gait's own for its size.
     pub fn new(model: Arc<RobotModel>, map_half_side_m: f64, map_cell_m: f64) -> Self {
         let params = GaitParams::for_model(&model);
         GaitModuleConfig {

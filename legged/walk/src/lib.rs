@@ -19,6 +19,7 @@ pub mod check;
 pub mod gait_module;
 pub mod map_view;
 pub mod messages;
+pub mod mount;
 pub mod picture;
 pub mod report;
 pub mod system;

@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use tca_ism::{BodyDimensions, IsmConfig};
+use tca_ism::{BodyDimensions, IsmConfig, PoseSource, SensorSpec, VirtualScanner};
 use tca_legged_controller::LeggedControllerConfig;
 use tca_legged_model::RobotModel;
 use tca_legged_sim::{SimParams, StartPose};
@@ -74,12 +74,16 @@ pub async fn connect_module(
             tca_legged_controller::connect(connector, config).await
         }
         "ism" => {
-            let config = IsmConfig::legged_simulated(
-                setup.terrain.clone(),
-                &setup.body_dimensions(),
-                setup.seed,
-            )
-            .with_simulated_time(true);
+            // The Perceptron on a mast sized for this robot's feet (see `mount`).
+            let spec = SensorSpec::perceptron();
+            let mount = crate::mount::mast_mount(&setup.model, spec.elevation_fov_rad);
+            let config = IsmConfig::new()
+                .with_pose_source(PoseSource::LeggedBody)
+                .with_sensor(
+                    VirtualScanner::on_body(spec, setup.terrain.clone(), mount)
+                        .with_seed(setup.seed),
+                )
+                .with_simulated_time(true);
             tca_ism::connect(connector, config).await
         }
         "ltm" => {
@@ -100,7 +104,11 @@ pub async fn connect_module(
                 setup.map_half_side_m(),
                 setup.map_cell_m(),
             );
-            config.ground_truth = setup.ground_truth.then(|| setup.terrain.clone());
+            if setup.ground_truth {
+                config.ground_truth = Some(setup.terrain.clone());
+            } else {
+                config = config.with_map_allowance();
+            }
             crate::gait_module::connect(connector, config).await
         }
         other => Err(ModuleError::Usage(format!(
