@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use tca_ism::{BodyDimensions, IsmConfig, PoseSource, SensorSpec, VirtualScanner};
+use tca_ism::{IsmConfig, PoseSource, SensorSpec, VirtualScanner};
 use tca_legged_controller::LeggedControllerConfig;
 use tca_legged_model::RobotModel;
 use tca_legged_sim::{SimParams, StartPose};
@@ -40,13 +40,6 @@ impl LeggedSetup {
     /// from where the step leaves the body, with room for a body move.
     pub fn map_half_side_m(&self) -> f64 {
         2.0 * max_reach(&self.model)
-    }
-
-    /// The body's size and standing height, for the scanner's mast: the extent of the body
-    /// link's collision shapes (the feet's span when it has none) and the body origin's
-    /// height over the feet in the neutral posture.
-    pub fn body_dimensions(&self) -> BodyDimensions {
-        body_dimensions(&self.model)
     }
 
     /// The map's cell: a twentieth of the longest leg's reach, at most 0.1 m.
@@ -138,46 +131,4 @@ pub fn foot_radius(model: &RobotModel) -> f64 {
         .map(|l| l.foot_radius())
         .fold(0.0, f64::max)
         .max(0.01)
-}
-
-/// The body's length and width (the extent along body x and y of the body link's collision
-/// shapes, each taken as its bounding ball; the feet's neutral span when the body has no
-/// shapes) and its standing height ([`RobotModel::neutral_height`]).
-pub fn body_dimensions(model: &RobotModel) -> BodyDimensions {
-    // Discs (x, y, radius) in the body frame whose union the body spans.
-    let mut discs: Vec<(f64, f64, f64)> = model
-        .link(model.body_link())
-        .map(|body| {
-            body.collisions()
-                .iter()
-                .map(|c| {
-                    let t = c.origin.translation.vector;
-                    (t.x, t.y, c.shape.bounding_radius())
-                })
-                .collect()
-        })
-        .unwrap_or_default();
-    if discs.is_empty() {
-        discs = model
-            .foot_positions(&model.neutral_posture())
-            .unwrap_or_default()
-            .iter()
-            .map(|f| (f.x, f.y, 0.0))
-            .collect();
-    }
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for (x, y, r) in discs {
-        lo = [lo[0].min(x - r), lo[1].min(y - r)];
-        hi = [hi[0].max(x + r), hi[1].max(y + r)];
-    }
-    let span = |i: usize| {
-        let d = hi[i] - lo[i];
-        if d.is_finite() && d > 0.0 { d } else { 0.1 }
-    };
-    BodyDimensions {
-        length_m: span(0),
-        width_m: span(1),
-        standing_height_m: model.neutral_height().max(0.01),
-    }
 }
