@@ -273,6 +273,10 @@ fn bad_robots_terrains_starts_and_goals_are_refused_with_what_to_do() {
         ),
         (&["walk", "--robot", "ambler", "--start", "3,nan"], "finite"),
         (&["walk", "--goal", "3,4"], "--robot"),
+        (
+            &["walk", "--robot", "ambler", "--seeds", "5..1"],
+            "FIRST..LAST",
+        ),
         (&["course", "write", "moon", "x.asc"], "boulders"),
     ];
     for (args, needle) in cases {

@@ -30,7 +30,106 @@ pub(crate) fn parse_place(what: &str, text: &str, yaw: bool) -> anyhow::Result<V
     }
 }
 
+/// Parses `FIRST..LAST` (or one seed).
+fn parse_seeds(text: &str) -> anyhow::Result<std::ops::RangeInclusive<u64>> {
+    let bad = || {
+        anyhow::anyhow!(
+            "--seeds {text:?} is not a range of seeds; give FIRST..LAST, e.g. --seeds 1..5"
+        )
+    };
+    let (a, b) = match text.split_once("..") {
+        Some((a, b)) => (a, b),
+        None => (text, text),
+    };
+    let (a, b) = (
+        a.trim().parse::<u64>().map_err(|_| bad())?,
+        b.trim().parse::<u64>().map_err(|_| bad())?,
+    );
+    if a > b {
+        return Err(bad());
+    }
+    Ok(a..=b)
+}
+
 pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
+    let Some(seeds) = &args.seeds else {
+        return run_one(args).await;
+    };
+    let seeds = parse_seeds(seeds)?;
+    let base = args.out.clone().unwrap_or_else(|| default_out(&args));
+    let (mut clean, mut total) = (0, 0);
+    for seed in seeds {
+        let mut one = args.clone();
+        one.seeds = None;
+        one.seed = seed;
+        one.json = false;
+        one.out = Some(base.join(format!("seed-{seed}")));
+        let report = walk_quietly(one).await?;
+        total += 1;
+        let ok = report.reached && report.falls == 0 && report.collisions == 0;
+        clean += usize::from(ok);
+        println!(
+            "seed {seed}: {} in {} steps, {} falls, {} collisions, least margin {}, {:.2} m from the goal, planning {:.1} ms per step, simulated {:.0} s, wall {:.1} s{}",
+            if report.reached {
+                "reached"
+            } else {
+                "not reached"
+            },
+            report.steps,
+            report.falls,
+            report.collisions,
+            report
+                .min_stability_margin_m
+                .map_or("-".into(), |m| format!("{m:.3} m")),
+            report.distance_to_goal_m,
+            report.planning_ms_per_step,
+            report.sim_time_s,
+            report.wall_time_s,
+            report
+                .reason
+                .as_ref()
+                .map(|r| format!(": {r}"))
+                .unwrap_or_default()
+        );
+        if args.json {
+            println!("{}", serde_json::to_string(&report)?);
+        }
+    }
+    println!("{clean} of {total} walks reached the goal with no fall and no collision");
+    Ok(if clean == total {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(2)
+    })
+}
+
+/// One walk with no progress display.
+async fn walk_quietly(args: WalkArgs) -> anyhow::Result<tca_legged_walk::LeggedWalkReport> {
+    let options = options_of(&args)?;
+    let (tx, _rx) = mpsc::unbounded_channel();
+    tca_legged_walk::walk(&options, tx).await
+}
+
+async fn run_one(args: WalkArgs) -> anyhow::Result<ExitCode> {
+    let options = options_of(&args)?;
+    let (tx, rx) = mpsc::unbounded_channel();
+    let display = tokio::spawn(show_progress(rx));
+    let result = tca_legged_walk::walk(&options, tx).await;
+    let _ = display.await;
+    let report = result?;
+    print!("{}", report.summary());
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    }
+    Ok(if report.reached {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(2)
+    })
+}
+
+/// The walk the arguments ask for.
+fn options_of(args: &WalkArgs) -> anyhow::Result<LeggedWalkOptions> {
     let robot = args.robot.clone().unwrap_or_default();
     let terrain = match (&args.course, &args.terrain) {
         (_, Some(path)) => Some(LeggedTerrain::File(path.clone())),
@@ -54,11 +153,7 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         }
         None => None,
     };
-    let stem = std::path::Path::new(&robot)
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "robot".into());
-    let options = LeggedWalkOptions {
+    Ok(LeggedWalkOptions {
         robot,
         terrain,
         start,
@@ -67,26 +162,18 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         concurrent: args.concurrent,
         seed: args.seed,
         ground_truth: args.ground_truth,
-        out: Some(
-            args.out
-                .clone()
-                .unwrap_or_else(|| PathBuf::from(format!("out/walk-{stem}"))),
-        ),
-    };
-    let (tx, rx) = mpsc::unbounded_channel();
-    let display = tokio::spawn(show_progress(rx));
-    let result = tca_legged_walk::walk(&options, tx).await;
-    let _ = display.await;
-    let report = result?;
-    print!("{}", report.summary());
-    if args.json {
-        println!("{}", serde_json::to_string(&report)?);
-    }
-    Ok(if report.reached {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(2)
+        out: Some(args.out.clone().unwrap_or_else(|| default_out(args))),
     })
+}
+
+/// `out/walk-ROBOT`, ROBOT the shipped robot's name or the file's stem.
+fn default_out(args: &WalkArgs) -> PathBuf {
+    let robot = args.robot.clone().unwrap_or_default();
+    let stem = std::path::Path::new(&robot)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "robot".into());
+    PathBuf::from(format!("out/walk-{stem}"))
 }
 
 /// One line per step (rewritten in place on a terminal), on stderr.

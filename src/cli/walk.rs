@@ -10,7 +10,7 @@ use tca_single_leg_messages::WalkMode;
 use tca_walk::{Progress, TerrainChoice, WalkOptions};
 use tokio::sync::mpsc;
 
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args)]
 #[command(after_help = "Examples:
   tca walk                                  the single leg on obstacle course 3
   tca walk --course 4 --concurrent --json   course 4, planning during execution
@@ -48,6 +48,11 @@ pub(crate) struct WalkArgs {
     /// (the scanner and the map still run), to tell a planner's failings from perception's.
     #[arg(long, requires = "robot")]
     pub(crate) ground_truth: bool,
+    /// With --robot: walk once per seed in FIRST..LAST (e.g. 1..5), each in DIR/seed-N, and
+    /// print one line per walk and a tally (exit status 0 only when every walk reached its
+    /// goal with no fall and no collision).
+    #[arg(long, value_name = "FIRST..LAST", requires = "robot")]
+    pub(crate) seeds: Option<String>,
     /// Then walk back to the start, using the maps made walking forward.
     #[arg(long, conflicts_with = "robot")]
     backward: bool,
