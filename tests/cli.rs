@@ -3,17 +3,13 @@
 
 mod common;
 
-use std::process::{Command, Stdio};
+use std::process::Command;
 use std::time::Duration;
 
 use common::*;
 
 fn tca(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_tca"))
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("tca runs")
+    tca_output(args)
 }
 
 fn stdout(out: &std::process::Output) -> String {

@@ -2,7 +2,7 @@
 //! the LTM Manager's map and the free gait in one process, driven by one `legged.walk`.
 //! Every report's states are checked against the terrain from the report's numbers alone.
 
-use std::process::{Command, Stdio};
+mod common;
 
 use tca_legged_walk::{LeggedTerrain, LeggedWalkOptions, LeggedWalkReport, check_states};
 use tca_robot::HeightField;
@@ -155,13 +155,7 @@ async fn an_impossible_goal_ends_with_the_reason_and_no_fall() {
     assert!(report.states.iter().all(|s| s.body[0] < 12.0));
 }
 
-fn tca(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_tca"))
-        .args(args)
-        .stdin(Stdio::null())
-        .output()
-        .expect("tca runs")
-}
+use common::tca_output as tca;
 
 /// `tca course write`, then `tca walk --robot FILE.urdf --terrain FILE.asc --json`: an
 /// eight-legged description written for this test walks with no change to the code, and

@@ -220,6 +220,21 @@ pub struct StartOptions {
     pub listen: Vec<String>,
 }
 
+impl StartOptions {
+    /// Central in this process on the simulated clock, logging to `log` if given (what a
+    /// whole walk in one process starts).
+    pub fn simulated(log: Option<PathBuf>) -> Self {
+        StartOptions {
+            log,
+            config: CentralConfig {
+                simulated_time: true,
+                ..CentralConfig::default()
+            },
+            ..StartOptions::default()
+        }
+    }
+}
+
 /// Starts central on the current tokio runtime.
 pub async fn start(options: StartOptions) -> Result<RunningCentral> {
     let (tx, rx) = mpsc::unbounded_channel();

@@ -197,11 +197,7 @@ async fn show_progress(mut rx: mpsc::UnboundedReceiver<Progress>) {
                     s.min_margin_m,
                     s.planning_ms
                 );
-                if tty {
-                    eprint!("\r{line:<100}");
-                } else {
-                    eprintln!("{line}");
-                }
+                super::progress_line(tty, &line);
             }
         }
     }

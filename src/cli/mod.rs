@@ -96,6 +96,16 @@ impl From<Compute> for tca_walk::ComputeModel {
     }
 }
 
+/// Prints one progress line on stderr: rewritten in place on a terminal, one line each
+/// otherwise.
+pub(crate) fn progress_line(tty: bool, line: &str) {
+    if tty {
+        eprint!("\r{line:<100}");
+    } else {
+        eprintln!("{line}");
+    }
+}
+
 fn init_tracing() {
     use tracing_subscriber::EnvFilter;
     let filter = EnvFilter::try_from_env("TCA_LOG")

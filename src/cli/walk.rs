@@ -190,11 +190,7 @@ async fn show_progress(mut rx: mpsc::UnboundedReceiver<Progress>) {
                     s.footfall.y_m,
                     s.body_target_y_m
                 );
-                if tty {
-                    eprint!("\r{line}");
-                } else {
-                    eprintln!("{line}");
-                }
+                super::progress_line(tty, &line);
             }
         }
     }

@@ -16,6 +16,15 @@ pub fn tca() -> tca_testkit::Tca {
     tca_testkit::Tca::at(env!("CARGO_BIN_EXE_tca"))
 }
 
+/// Runs `tca ARGS` to its end with no input, waiting as long as it takes.
+pub fn tca_output(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_tca"))
+        .args(args)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("tca runs")
+}
+
 /// A `tca` child process, killed when dropped.
 pub type ChildProcess = tca_testkit::ChildProcess;
 

@@ -176,16 +176,9 @@ pub async fn walk(
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
     let log_path = options.out.as_ref().map(|d| d.join("traffic.mcap"));
-    let central = tca_central::start(StartOptions {
-        log: log_path.clone(),
-        config: tca_central::CentralConfig {
-            simulated_time: true,
-            ..tca_central::CentralConfig::default()
-        },
-        ..StartOptions::default()
-    })
-    .await
-    .context("cannot start central")?;
+    let central = tca_central::start(StartOptions::simulated(log_path.clone()))
+        .await
+        .context("cannot start central")?;
     let connector = Connector::from(central.in_process());
     let modules = connect_all(&connector, &setup)
         .await

@@ -172,16 +172,9 @@ pub async fn walk(
             setup.out = out.clone();
             setup.step_pictures = options.step_pictures;
             let log = out.as_ref().map(|d| d.join("traffic.mcap"));
-            let central = tca_central::start(StartOptions {
-                log: log.clone(),
-                config: tca_central::CentralConfig {
-                    simulated_time: true,
-                    ..tca_central::CentralConfig::default()
-                },
-                ..StartOptions::default()
-            })
-            .await
-            .context("cannot start central")?;
+            let central = tca_central::start(StartOptions::simulated(log.clone()))
+                .await
+                .context("cannot start central")?;
             let connector = Connector::from(central.in_process());
             let modules = connect_all(&connector, &setup)
                 .await
