@@ -74,6 +74,19 @@ async fn the_ambler_crosses_the_boulder_field_on_its_own_map() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_ambler_plans_each_step_while_the_last_executes() {
+    let report = walk(LeggedWalkOptions {
+        concurrent: true,
+        ..options("ambler", "flat", 1)
+    })
+    .await;
+    assert_eq!(report.mode, "concurrent");
+    assert_safe_arrival(&report, &course_terrain("flat", 1));
+    // Time runs forward through the overlapping steps.
+    assert!(report.states.windows(2).all(|w| w[0].t_s <= w[1].t_s));
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_ambler_climbs_the_slope_on_its_own_map() {
     let report = walk(options("ambler", "slope", 3)).await;
     assert_safe_arrival(&report, &course_terrain("slope", 3));
