@@ -1135,7 +1135,22 @@ impl FreeGait {
                             info.name
                         ));
                     }
-                    Some(_) => {}
+                    Some(_) => {
+                        // The foot's path bends away from the straight line the travel
+                        // height was chosen over: keep it as high above the highest ground
+                        // near it, which a map of a steep flank may put lower than it is.
+                        let near = terrain
+                            .max_height_in_disc(Point2::new(centre.x, centre.y), r + p.clearance_m);
+                        if let Some(h) = near
+                            && centre.z - r - h < p.clearance_m
+                        {
+                            return Err(format!(
+                                "leg `{}`'s foot would pass {:.3} m over the ground beside it",
+                                info.name,
+                                centre.z - r - h
+                            ));
+                        }
+                    }
                 },
                 Segment::Lower => {
                     let Some(c) = clearance else {

@@ -15,6 +15,15 @@ const DIRECTIONS: usize = 12;
 /// the terrain: the highest of `ground(d) + sqrt(r² - d²)` over sampled points `d` of its
 /// footprint. `None` when any of them is unknown.
 pub(crate) fn rest_height(view: &dyn TerrainView, c: Point2<f64>, r: f64) -> Option<f64> {
+    highest_rest(c, r, |p| view.height_at(p))
+}
+
+/// The highest of `ground(d) + sqrt(r² - d²)` over the sampled footprint of a sphere.
+fn highest_rest(
+    c: Point2<f64>,
+    r: f64,
+    ground: impl Fn(Point2<f64>) -> Option<f64>,
+) -> Option<f64> {
     let mut best = f64::NEG_INFINITY;
     for ring in RINGS {
         let d = ring * r;
@@ -22,7 +31,7 @@ pub(crate) fn rest_height(view: &dyn TerrainView, c: Point2<f64>, r: f64) -> Opt
         let count = if ring == 0.0 { 1 } else { DIRECTIONS };
         for k in 0..count {
             let a = k as f64 * std::f64::consts::TAU / DIRECTIONS as f64 + ring;
-            let h = view.height_at(Point2::new(c.x + d * a.cos(), c.y + d * a.sin()))?;
+            let h = ground(Point2::new(c.x + d * a.cos(), c.y + d * a.sin()))?;
             best = best.max(h + lift);
         }
     }
@@ -30,9 +39,10 @@ pub(crate) fn rest_height(view: &dyn TerrainView, c: Point2<f64>, r: f64) -> Opt
 }
 
 /// How far a foot sphere centred at `c` is above resting on the terrain (negative when it
-/// would be in the ground); `None` when the ground under it is unknown.
+/// would be in the ground), over the highest the ground can be; `None` when the ground
+/// under it is unknown and unbounded.
 pub(crate) fn sphere_clearance(view: &dyn TerrainView, c: &Point3<f64>, r: f64) -> Option<f64> {
-    rest_height(view, Point2::new(c.x, c.y), r).map(|h| c.z - h)
+    highest_rest(Point2::new(c.x, c.y), r, |p| view.height_bound_at(p)).map(|h| c.z - h)
 }
 
 /// The world centre of a foot sphere from its contact point (the sphere's bottom).

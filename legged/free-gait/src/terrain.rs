@@ -11,6 +11,13 @@ use tca_robot::HeightField;
 pub trait TerrainView {
     /// The height of the ground at a point, metres.
     fn height_at(&self, p: Point2<f64>) -> Option<f64>;
+    /// The highest the ground at a point can be, metres: its height where it is known, and
+    /// where it is not but is bounded (hidden behind something seen, or a small gap among
+    /// seen ground), that bound; `None` when nothing bounds it. A swinging foot keeps its
+    /// clearance above this, so it may pass over ground it cannot stand on.
+    fn height_bound_at(&self, p: Point2<f64>) -> Option<f64> {
+        self.height_at(p)
+    }
     /// The highest ground within a disc, metres.
     fn max_height_in_disc(&self, c: Point2<f64>, r: f64) -> Option<f64>;
     /// How bad a foothold centred at `p` is for a foot of this radius: 0 is ideal, larger
@@ -21,6 +28,9 @@ pub trait TerrainView {
 impl<T: TerrainView + ?Sized> TerrainView for &T {
     fn height_at(&self, p: Point2<f64>) -> Option<f64> {
         (**self).height_at(p)
+    }
+    fn height_bound_at(&self, p: Point2<f64>) -> Option<f64> {
+        (**self).height_bound_at(p)
     }
     fn max_height_in_disc(&self, c: Point2<f64>, r: f64) -> Option<f64> {
         (**self).max_height_in_disc(c, r)

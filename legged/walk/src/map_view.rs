@@ -35,7 +35,7 @@ struct Layer {
 impl Layer {
     fn new(grid: &MapGrid) -> Result<Self, String> {
         let (nx, ny) = (grid.nx as usize, grid.ny as usize);
-        if grid.cells.len() != nx * ny || !(grid.resolution_m > 0.0) {
+        if grid.cells.len() != nx * ny || grid.resolution_m.is_nan() || grid.resolution_m <= 0.0 {
             return Err(format!(
                 "a {:?} map of {nx} x {ny} cells came with {} cells at {} m; the LTM Manager sent a malformed map",
                 grid.kind,
@@ -97,20 +97,71 @@ impl Layer {
         self.at(p)
     }
 
+    /// The centres of the cells next to the one holding `p` on the sides `p` lies more
+    /// than a quarter of a cell toward (none when `p` is near its cell's centre).
+    fn toward(&self, p: Point2<f64>) -> Vec<Point2<f64>> {
+        let side = |v: f64| {
+            let off = v - v.round();
+            if off > 0.25 {
+                1.0
+            } else if off < -0.25 {
+                -1.0
+            } else {
+                0.0
+            }
+        };
+        let fx = (p.x - self.origin.x) / self.cell;
+        let fy = (p.y - self.origin.y) / self.cell;
+        let (sx, sy) = (side(fx), side(fy));
+        let centre = |dx: f64, dy: f64| {
+            Point2::new(
+                self.origin.x + (fx.round() + dx) * self.cell,
+                self.origin.y + (fy.round() + dy) * self.cell,
+            )
+        };
+        [(sx, 0.0), (0.0, sy), (sx, sy)]
+            .into_iter()
+            .filter(|&(dx, dy)| (dx, dy) != (0.0, 0.0))
+            .map(|(dx, dy)| centre(dx, dy))
+            .collect()
+    }
+
     fn at(&self, p: Point2<f64>) -> Seen {
         self.index(p)
             .map_or(Seen::Unknown, |(ix, iy)| self.cells[iy * self.nx + ix])
     }
 
-    /// Cells whose centres lie within `r` of `c` (at least the cell holding `c`).
+    /// As [`Layer::at`], a hidden cell's bound raised to the highest ground seen or bounded
+    /// in the cells around it: the bound comes from a ray that passed over the cell
+    /// somewhere, and the ground under a part of the cell the ray missed (the far flank of
+    /// a rock) may stand as high as its neighbours.
+    fn bounded(&self, p: Point2<f64>) -> Seen {
+        let Some((ix, iy)) = self.index(p) else {
+            return Seen::Unknown;
+        };
+        let Seen::AtMost(mut h) = self.cells[iy * self.nx + ix] else {
+            return self.cells[iy * self.nx + ix];
+        };
+        for j in iy.saturating_sub(1)..(iy + 2).min(self.ny) {
+            for i in ix.saturating_sub(1)..(ix + 2).min(self.nx) {
+                if let Seen::Known(v) | Seen::AtMost(v) = self.cells[j * self.nx + i] {
+                    h = h.max(v);
+                }
+            }
+        }
+        Seen::AtMost(h)
+    }
+
+    /// Cells whose centres lie within `r` of `c` (at least the cell holding `c`), hidden
+    /// ones bounded as by [`Layer::bounded`].
     fn disc(&self, c: Point2<f64>, r: f64) -> Vec<Seen> {
         let n = (r / self.cell).ceil() as i64;
-        let mut out = vec![self.at(c)];
+        let mut out = vec![self.bounded(c)];
         for dy in -n..=n {
             for dx in -n..=n {
                 let q = Point2::new(c.x + dx as f64 * self.cell, c.y + dy as f64 * self.cell);
                 if (dx, dy) != (0, 0) && (q - c).norm() <= r {
-                    out.push(self.at(q));
+                    out.push(self.bounded(q));
                 }
             }
         }
@@ -159,11 +210,18 @@ impl TerrainView for MapView {
         }
     }
 
+    fn height_bound_at(&self, p: Point2<f64>) -> Option<f64> {
+        // Where the cell is not known, the bound a hidden cell carries or the one the ground
+        // seen around an unseen cell gives.
+        self.height_at(p)
+            .or_else(|| self.max_height_in_disc(p, 0.0))
+    }
+
     fn max_height_in_disc(&self, c: Point2<f64>, r: f64) -> Option<f64> {
-        // A hidden cell is bounded by what hides it: enough to keep a swing clear of it. An
-        // unseen cell among seen ones (a gap between the scanner's samples, the floor of a
-        // narrow hollow) is taken as high as the highest ground seen around it; one with
-        // nothing seen around it makes the disc unknown.
+        // A hidden cell is bounded by what hides it and by the ground around it: enough to
+        // keep a swing clear of it. An unseen cell among seen ones (a gap between the
+        // scanner's samples, the floor of a narrow hollow) is taken as high as the highest
+        // ground seen around it; one with nothing seen around it makes the disc unknown.
         let mut best = f64::NEG_INFINITY;
         let mut gaps = false;
         for s in self.elevation.disc(c, r) {
@@ -193,12 +251,23 @@ impl TerrainView for MapView {
     }
 
     fn foothold_cost(&self, p: Point2<f64>, foot_radius_m: f64) -> Option<f64> {
-        // The footfall and slope maps are evaluated over the robot's foot at each cell.
-        let (Seen::Known(deviation_m), Seen::Known(slope)) =
+        // The footfall and slope maps are evaluated over the robot's foot at each cell's
+        // centre. A foot well off its cell's centre reaches over ground that cell's
+        // evaluation does not cover (over the edge of a ditch, say): it is judged by the
+        // worst of the known cells it leans toward as well.
+        let (Seen::Known(mut deviation_m), Seen::Known(mut slope)) =
             (self.footfall.at(p), self.slope.at(p))
         else {
             return None;
         };
+        for q in self.footfall.toward(p) {
+            if let Seen::Known(d) = self.footfall.at(q) {
+                deviation_m = deviation_m.max(d);
+            }
+            if let Seen::Known(s) = self.slope.at(q) {
+                slope = slope.max(s);
+            }
+        }
         let relative = deviation_m / foot_radius_m.max(self.footfall.cell);
         if relative > self.max_residual || slope > self.max_slope_rad {
             return Some(f64::INFINITY);
@@ -236,6 +305,10 @@ impl StepView {
 impl TerrainView for StepView {
     fn height_at(&self, p: Point2<f64>) -> Option<f64> {
         self.view().height_at(p)
+    }
+
+    fn height_bound_at(&self, p: Point2<f64>) -> Option<f64> {
+        self.view().height_bound_at(p)
     }
 
     fn max_height_in_disc(&self, c: Point2<f64>, r: f64) -> Option<f64> {
@@ -319,6 +392,24 @@ mod tests {
         );
         assert_eq!(v.foothold_cost(Point2::new(0.5, 0.5), 0.1), None);
         assert_eq!(v.height_at(Point2::new(-3.0, 0.5)), None);
+        // A swing may pass over a hidden cell, as high as what hides it allows.
+        assert_eq!(
+            v.height_bound_at(Point2::new(0.5, 0.5)),
+            Some(0.9f32 as f64)
+        );
+        assert_eq!(
+            v.height_bound_at(Point2::new(0.2, 0.5)),
+            v.height_at(Point2::new(0.2, 0.5))
+        );
+        // A foot well off its cell's centre is judged by the cell it leans toward too.
+        assert_eq!(
+            v.foothold_cost(Point2::new(0.23, 0.5), 0.1),
+            Some(f64::INFINITY)
+        );
+        assert!(
+            v.foothold_cost(Point2::new(0.17, 0.5), 0.1)
+                .is_some_and(f64::is_finite)
+        );
         let mut bad = elevation.clone();
         bad.cells.pop();
         assert!(
