@@ -66,10 +66,13 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         one.out = Some(base.join(format!("seed-{seed}")));
         let report = walk_quietly(one).await?;
         total += 1;
-        let ok = report.reached && report.falls == 0 && report.collisions == 0;
+        let ok = report.reached
+            && report.falls == 0
+            && report.collisions == 0
+            && report.state_problems.is_empty();
         clean += usize::from(ok);
         println!(
-            "seed {seed}: {} in {} steps, {} falls, {} collisions, least margin {}, {:.2} m from the goal, planning {:.1} ms per step, simulated {:.0} s, wall {:.1} s{}",
+            "seed {seed}: {} in {} steps, {} falls, {} collisions, least margin {}, {} inconsistent states, {:.2} m from the goal, planning {:.1} ms per step, simulated {:.0} s, wall {:.1} s{}",
             if report.reached {
                 "reached"
             } else {
@@ -81,6 +84,7 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
             report
                 .min_stability_margin_m
                 .map_or("-".into(), |m| format!("{m:.3} m")),
+            report.state_problems.len(),
             report.distance_to_goal_m,
             report.planning_ms_per_step,
             report.sim_time_s,
@@ -95,7 +99,9 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
             println!("{}", serde_json::to_string(&report)?);
         }
     }
-    println!("{clean} of {total} walks reached the goal with no fall and no collision");
+    println!(
+        "{clean} of {total} walks reached the goal with no fall, no collision and every state consistent"
+    );
     Ok(if clean == total {
         ExitCode::SUCCESS
     } else {

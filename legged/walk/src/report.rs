@@ -93,6 +93,10 @@ pub struct LeggedWalkReport {
     pub distance_to_goal_m: f64,
     /// Every foothold planned, in order: leg and world point.
     pub footholds: Vec<(String, [f64; 3])>,
+    /// What [`crate::check_states`] finds wrong with `states` against the terrain (empty:
+    /// every state consistent).
+    #[serde(default)]
+    pub state_problems: Vec<String>,
     /// Files written.
     pub outputs: Vec<PathBuf>,
 }
@@ -133,6 +137,18 @@ impl LeggedWalkReport {
             self.planning_ms_per_step,
             self.states.len()
         );
+        if self.state_problems.is_empty() {
+            s += &format!(
+                "  every recorded state consistent with the terrain ({} checked)\n",
+                self.states.len()
+            );
+        } else {
+            s += &format!(
+                "  {} recorded states inconsistent with the terrain, the first: {}\n",
+                self.state_problems.len(),
+                self.state_problems[0]
+            );
+        }
         for o in &self.outputs {
             s += &format!("  wrote {}\n", o.display());
         }

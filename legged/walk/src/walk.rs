@@ -17,6 +17,7 @@ use tca_messages::control::TaskOutcome;
 use tca_module::{Connector, Module};
 use tokio::sync::mpsc;
 
+use crate::check::check_states;
 use crate::messages::StepPlanned;
 use crate::picture;
 use crate::report::{LeggedWalkReport, StateRecord};
@@ -281,8 +282,13 @@ pub async fn walk(
                     .map(|(leg, p)| (leg.clone(), [p.x_m, p.y_m, p.z_m]))
             })
             .collect(),
+        state_problems: Vec::new(),
         outputs: Vec::new(),
     };
+    report.state_problems = check_states(&report.states, &field)
+        .iter()
+        .map(ToString::to_string)
+        .collect();
     walker.close().await;
     for m in modules {
         m.close().await;
