@@ -123,15 +123,13 @@ async fn run_one(args: WalkArgs) -> anyhow::Result<ExitCode> {
     let result = tca_legged_walk::walk(&options, tx).await;
     let _ = display.await;
     let report = result?;
-    print!("{}", report.summary());
-    if args.json {
-        println!("{}", serde_json::to_string(&report)?);
-    }
-    Ok(if report.reached {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(2)
-    })
+    super::finish_walk(
+        &report.summary(),
+        args.json
+            .then(|| serde_json::to_string(&report))
+            .transpose()?,
+        report.reached,
+    )
 }
 
 /// The walk the arguments ask for.

@@ -96,6 +96,24 @@ impl From<Compute> for tca_walk::ComputeModel {
     }
 }
 
+/// Prints a walk's summary, and its report as one JSON line when given; the exit status is
+/// success when the walk reached its goal, 2 when not.
+pub(crate) fn finish_walk(
+    summary: &str,
+    json: Option<String>,
+    reached: bool,
+) -> anyhow::Result<ExitCode> {
+    print!("{summary}");
+    if let Some(line) = json {
+        println!("{line}");
+    }
+    Ok(if reached {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(2)
+    })
+}
+
 /// Prints one progress line on stderr: rewritten in place on a terminal, one line each
 /// otherwise.
 pub(crate) fn progress_line(tty: bool, line: &str) {

@@ -151,15 +151,13 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
     let result = tca_walk::walk(&options, tx).await;
     let _ = display.await;
     let report = result?;
-    print!("{}", tca_walk::report::summary(&report));
-    if args.json {
-        println!("{}", serde_json::to_string(&report)?);
-    }
-    Ok(if report.reached {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(2)
-    })
+    super::finish_walk(
+        &tca_walk::report::summary(&report),
+        args.json
+            .then(|| serde_json::to_string(&report))
+            .transpose()?,
+        report.reached,
+    )
 }
 
 /// Draws a progress bar on a terminal, one line per step otherwise (stderr).
