@@ -174,34 +174,55 @@ async fn moves_send_informs_and_a_bad_move_raises_move_failed() {
         transition: true,
     };
     assert_eq!(walker.run(Command::Leg(swing)).await, TaskOutcome::Achieved);
-    // The first command's state, the lift-off's, the one after the move.
-    let first = within("first supportState", walker.states.recv())
-        .await
-        .unwrap();
-    assert_eq!(first.t_s, 0.0);
-    assert!(first.feet.iter().all(|f| f.stance));
-    let lift = within("lift-off footContact", walker.contacts.recv())
-        .await
-        .unwrap();
+    // The first command's state, the lift-off's, the one after the move, and the lift-off
+    // and touch-down contacts. Central here keeps wall-clock time, so the walker's inform
+    // handlers run concurrently and may see these in any order: tell them apart by content.
+    let mut states = Vec::new();
+    for what in ["first", "second", "third"] {
+        states.push(
+            within(what, walker.states.recv())
+                .await
+                .expect("a supportState"),
+        );
+    }
+    let mut contacts = Vec::new();
+    for what in ["first contact", "second contact"] {
+        contacts.push(
+            within(what, walker.contacts.recv())
+                .await
+                .expect("a footContact"),
+        );
+    }
+    let first = states
+        .iter()
+        .find(|s| s.t_s == 0.0 && s.feet.iter().all(|f| f.stance))
+        .expect("the first command's state, every foot standing");
+    assert_eq!(first.feet.len(), 6);
+    let lifted = states
+        .iter()
+        .find(|s| !s.feet[0].stance)
+        .expect("the lift-off state");
+    assert!(lifted.feet[1..].iter().all(|f| f.stance));
+    let lift = contacts
+        .iter()
+        .find(|c| !c.stance)
+        .expect("the lift-off contact");
     assert_eq!(lift.leg, "left_front");
-    assert!(!lift.stance);
-    let lifted = within("lift-off supportState", walker.states.recv())
-        .await
-        .unwrap();
-    assert!(!lifted.feet[0].stance);
-    let down = within("touch-down footContact", walker.contacts.recv())
-        .await
-        .unwrap();
-    assert!(down.stance);
+    let down = contacts
+        .iter()
+        .find(|c| c.stance)
+        .expect("the touch-down contact");
+    assert_eq!(down.leg, "left_front");
     assert!(down.at.z_m.abs() < 1e-3);
     assert!(
         (down.at.x_m - lift.at.x_m - 0.03).abs() < 3e-3,
         "{lift:?} -> {down:?}"
     );
-    let after = within("supportState after the swing", walker.states.recv())
-        .await
-        .unwrap();
-    assert!(after.feet[0].stance && after.t_s > 0.0 && after.margin_m > 0.0);
+    let after = states
+        .iter()
+        .find(|s| s.t_s > 0.0)
+        .expect("the state after the swing");
+    assert!(after.feet[0].stance && after.margin_m > 0.0);
 
     // A body move 2 cm forward.
     let mut target = walker.module.query(&BodyPose).await.unwrap();
