@@ -17,20 +17,7 @@ fn ambler() -> Arc<RobotModel> {
 fn go(name: &str, terrain: Arc<HeightField>) -> Walk {
     let goal = Point2::new(courses::GOAL.0, courses::GOAL.1);
     let w = walk(name, ambler(), terrain, courses::START, goal, 600);
-    println!(
-        "ambler {name}: reached {} in {} steps, {:.2} s ({:.1} ms planning per step), min margin {:.3} m executed / {:.3} m planned, {:.2} m left{}",
-        w.reached,
-        w.steps,
-        w.seconds,
-        w.planning_ms_per_step,
-        w.min_margin,
-        w.min_planned_margin,
-        w.final_distance,
-        w.error
-            .as_ref()
-            .map(|e| format!(": {e}"))
-            .unwrap_or_default()
-    );
+    println!("{}", w.describe(&format!("ambler {name}")));
     w
 }
 

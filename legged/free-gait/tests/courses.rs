@@ -21,19 +21,8 @@ fn course(name: &str) {
         600,
     );
     println!(
-        "course {name} ({}): reached {} in {} steps, {:.2} s ({:.1} ms planning per step), min margin {:.4} m executed / {:.4} m planned, {:.2} m left{}",
-        c.robot_hint,
-        w.reached,
-        w.steps,
-        w.seconds,
-        w.planning_ms_per_step,
-        w.min_margin,
-        w.min_planned_margin,
-        w.final_distance,
-        w.error
-            .as_ref()
-            .map(|e| format!(": {e}"))
-            .unwrap_or_default()
+        "{}",
+        w.describe(&format!("course {name} ({})", c.robot_hint))
     );
     assert!(w.reached, "{name}: {w:?}");
 }

@@ -10,20 +10,7 @@ use tca_legged_model::RobotModel;
 use tca_robot::HeightField;
 
 fn report(name: &str, w: &Walk) {
-    println!(
-        "{name}: reached {} in {} steps, {:.2} s ({:.1} ms planning per step), min margin {:.4} m executed / {:.4} m planned, {:.2} m left{}",
-        w.reached,
-        w.steps,
-        w.seconds,
-        w.planning_ms_per_step,
-        w.min_margin,
-        w.min_planned_margin,
-        w.final_distance,
-        w.error
-            .as_ref()
-            .map(|e| format!(": {e}"))
-            .unwrap_or_default()
-    );
+    println!("{}", w.describe(name));
 }
 
 fn hexapod_walk(name: &str, terrain: Arc<HeightField>) -> Walk {

@@ -143,15 +143,7 @@ impl LeggedSim {
             .map(|m| m.margin_m)
             .unwrap_or(f64::NEG_INFINITY);
         // Carry it out, checking the terrain at every sample.
-        let mut report = MoveReport {
-            start_s: self.clock_s,
-            duration_s: 0.0,
-            samples: 0,
-            min_margin_m: min_margin,
-            events: Vec::new(),
-            contact: None,
-        };
-        self.counters.moves += 1;
+        let mut report = self.begin_move(min_margin);
         for p in plan {
             report.samples += 1;
             let mut hits = self.link_contacts(&p.body, &p.posture, None);

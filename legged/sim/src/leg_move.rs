@@ -228,15 +228,7 @@ impl LeggedSim {
         let model = self.model.clone();
         let l = &model.legs()[i];
         let tol = self.params.contact_tolerance_m;
-        let mut report = MoveReport {
-            start_s: self.clock_s,
-            duration_s: 0.0,
-            samples: 0,
-            min_margin_m: min_margin,
-            events: Vec::new(),
-            contact: None,
-        };
-        self.counters.moves += 1;
+        let mut report = self.begin_move(min_margin);
         if self.stance[i] {
             self.stance[i] = false;
             self.push_event(&mut report, i, false);

@@ -423,6 +423,19 @@ impl LeggedSim {
         }
     }
 
+    /// Counts a move starting now and opens its report.
+    pub(crate) fn begin_move(&mut self, min_margin_m: f64) -> MoveReport {
+        self.counters.moves += 1;
+        MoveReport {
+            start_s: self.clock_s,
+            duration_s: 0.0,
+            samples: 0,
+            min_margin_m,
+            events: Vec::new(),
+            contact: None,
+        }
+    }
+
     /// Marks a tip-over: the robot lies on the ground from now on.
     pub(crate) fn tip_over(&mut self, command: MoveCommand, margin_m: f64) -> MoveError {
         self.fallen = true;

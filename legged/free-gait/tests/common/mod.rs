@@ -289,6 +289,26 @@ pub struct Walk {
     pub planning_ms_per_step: f64,
 }
 
+impl Walk {
+    /// One line saying how the walk went, for the test output.
+    pub fn describe(&self, name: &str) -> String {
+        format!(
+            "{name}: reached {} in {} steps, {:.2} s ({:.1} ms planning per step), min margin {:.4} m executed / {:.4} m planned, {:.2} m left{}",
+            self.reached,
+            self.steps,
+            self.seconds,
+            self.planning_ms_per_step,
+            self.min_margin,
+            self.min_planned_margin,
+            self.final_distance,
+            self.error
+                .as_ref()
+                .map(|e| format!(": {e}"))
+                .unwrap_or_default()
+        )
+    }
+}
+
 /// Walks from (x, y, yaw) toward the goal with the ideal executor, at most `max_steps`.
 /// Panics on any refused or unstable action.
 pub fn walk(
