@@ -76,6 +76,11 @@ pub struct CentralConfig {
     /// meet over-limit refusals) until the writer is back under half: the log's pace is
     /// central's.
     pub max_log_backlog: u32,
+    /// User ids besides central's own whose processes may connect to central's local sockets
+    /// (`--listen local`). The kernel tells central each peer's user id; everyone else is
+    /// refused at connection, before any hello. The socket's directory (0700) and file (0600)
+    /// keep other users out as well: to admit one, also give it access to them.
+    pub local_peer_uids: Vec<u32>,
     /// Who may connect, register and send (None: everyone may do everything).
     #[serde(skip)]
     pub policy: Option<Arc<Policy>>,
@@ -106,6 +111,7 @@ impl Default for CentralConfig {
             max_outbox_bytes: 64 << 20,
             // About 20 to 30 MB of records (each holds its frame).
             max_log_backlog: 1 << 17,
+            local_peer_uids: Vec::new(),
             policy: None,
             simulated_time: false,
         }

@@ -17,6 +17,9 @@
 //!   keep up gets no new work, one that stops reading is disconnected) are `tca-link`'s.
 //! - `zenoh_router`: central as a zenoh router; modules are zenoh clients (the key scheme
 //!   and configuration are `tca_link::zenoh`'s).
+//! - Local sockets (`local`, `local/NAME` in [`StartOptions::listen`]): `tca_link::local`'s
+//!   listener, opening links through the runtime; any mix of local and zenoh endpoints is
+//!   served by one central.
 
 pub mod config;
 pub mod core;

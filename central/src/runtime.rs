@@ -18,9 +18,10 @@ use tca_messages::{ModuleName, now_ns};
 use tokio::sync::{mpsc, oneshot};
 use tokio::task::JoinHandle;
 
+use tca_link::local::Attach;
 use tca_link::{
     FrameReceiver, Gauge, Hub, InProcLink, InProcTransport, Inbox, LinkError, LinkSignal,
-    OutboxLimits, Taken,
+    LocalEndpoint, LocalListener, OutboxLimits, PeerPolicy, Taken,
 };
 
 use crate::core::{Action, Central, Counters, Event, LinkId, OutboxUse};
@@ -166,11 +167,26 @@ impl CentralHandle {
     }
 }
 
+/// Central's side of local links: connections accepted on its Unix sockets open links here.
+#[derive(Debug)]
+struct LocalAttach(CentralHandle);
+
+impl Attach for LocalAttach {
+    fn attach(&self) -> Option<(LinkId, Arc<Inbox>, FrameReceiver)> {
+        self.0.attach().ok()
+    }
+
+    fn closed(&self, link: LinkId) {
+        let _ = self.0.tx.send(Input::Event(Event::Closed(link)));
+    }
+}
+
 /// A central running in this process.
 pub struct RunningCentral {
     handle: CentralHandle,
     task: JoinHandle<Result<Stats>>,
     zenoh: Option<ZenohCentral>,
+    local: Vec<LocalListener>,
 }
 
 impl RunningCentral {
@@ -184,17 +200,24 @@ impl RunningCentral {
         self.handle.in_process()
     }
 
-    /// The zenoh endpoints central listens on, if the zenoh transport is on.
+    /// The endpoints central listens on: local ones first, then zenoh ones.
     pub fn listening(&self) -> Vec<String> {
-        self.zenoh
-            .as_ref()
-            .map(|z| z.endpoints().to_vec())
-            .unwrap_or_default()
+        let mut all: Vec<String> = self
+            .local
+            .iter()
+            .map(|l| l.endpoint().to_string())
+            .collect();
+        if let Some(z) = &self.zenoh {
+            all.extend(z.endpoints().iter().cloned());
+        }
+        all
     }
 
     /// Stops central: closes every link, finishes the log and returns the final statistics.
     pub async fn shutdown(self) -> Result<Stats> {
         let _ = self.handle.tx.send(Input::Shutdown);
+        // No new local connections; the socket files go.
+        drop(self.local);
         let stats = self.task.await.map_err(|_| CentralError::Stopped)??;
         if let Some(z) = self.zenoh {
             z.close().await;
@@ -215,8 +238,9 @@ pub struct StartOptions {
     pub config: CentralConfig,
     /// Write the traffic log here (MCAP).
     pub log: Option<PathBuf>,
-    /// Also serve modules over zenoh, listening on these endpoints
-    /// (e.g. `tcp/127.0.0.1:7447`).
+    /// Also serve modules from other processes, listening on these endpoints: `local` or
+    /// `local/NAME` (a Unix socket, for modules on this machine) and zenoh ones (e.g.
+    /// `tcp/127.0.0.1:7447`), any mix of them.
     pub listen: Vec<String>,
 }
 
@@ -255,7 +279,25 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
         Some(path) => Some(LogSink::create(path)?),
         None => None,
     };
-    let zenoh = if options.listen.is_empty() {
+    let (local_endpoints, zenoh_endpoints): (Vec<&String>, Vec<&String>) = options
+        .listen
+        .iter()
+        .partition(|e| LocalEndpoint::is_local(e));
+    let mut local = Vec::new();
+    if !local_endpoints.is_empty() {
+        let peers = PeerPolicy::same_user_and(options.config.local_peer_uids.iter().copied())?;
+        let attach: Arc<dyn Attach> = Arc::new(LocalAttach(handle.clone()));
+        for e in local_endpoints {
+            let endpoint = LocalEndpoint::parse(e)?;
+            local.push(LocalListener::bind(
+                &endpoint,
+                peers.clone(),
+                options.config.max_frame_bytes,
+                attach.clone(),
+            )?);
+        }
+    }
+    let zenoh = if zenoh_endpoints.is_empty() {
         None
     } else {
         let users = options
@@ -263,7 +305,8 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
             .policy
             .as_ref()
             .and_then(|p| p.zenoh_users_file().map(|f| f.to_owned()));
-        Some(ZenohCentral::start(&options.listen, users.as_deref(), handle.clone()).await?)
+        let endpoints: Vec<String> = zenoh_endpoints.into_iter().cloned().collect();
+        Some(ZenohCentral::start(&endpoints, users.as_deref(), handle.clone()).await?)
     };
     let limits = handle.outbox_limits;
     let max_log_backlog = options.config.max_log_backlog.max(1) as usize;
@@ -273,6 +316,7 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
         handle,
         task,
         zenoh,
+        local,
     })
 }
 

@@ -7,8 +7,9 @@
 //! central never links the module library.
 //!
 //! A module opens a link through a [`Transport`]: [`InProcTransport`] (central in the same
-//! process, over tokio channels; central hands one out) or [`ZenohTransport`] (central
-//! elsewhere, over zenoh). Another transport slots in by implementing the trait.
+//! process, over tokio channels; central hands one out), [`LocalTransport`] (central on this
+//! machine, over a Unix socket) or [`ZenohTransport`] (central elsewhere, over zenoh). Another
+//! transport slots in by implementing the trait. [`transport_for`] picks one by endpoint.
 //!
 //! # Layout
 //!
@@ -20,6 +21,8 @@
 //! - [`hub`]: [`Hub`], how the queues wake whoever drives them (central's driver).
 //! - [`inproc`]: the in-process transport: [`InProcTransport`], [`InProcLink`],
 //!   [`InProcSender`].
+//! - [`local`]: the same-machine transport over a Unix socket: [`LocalTransport`] (a
+//!   module's side), [`LocalListener`] (central's side), [`LocalEndpoint`], [`PeerPolicy`].
 //! - [`net`]: free loopback ports and endpoints.
 //! - [`zenoh`](mod@zenoh): the zenoh key scheme and liveliness tokens, router and client
 //!   configuration, the zenoh login, and [`ZenohTransport`], a module's client side.
@@ -29,6 +32,7 @@ pub mod error;
 pub mod hub;
 pub mod inbox;
 pub mod inproc;
+pub mod local;
 pub mod net;
 pub mod outbox;
 pub mod transport;
@@ -38,6 +42,7 @@ pub use error::{LinkError, Result};
 pub use hub::{Hub, LinkSignal};
 pub use inbox::{Inbox, InboxUse, MAX_REFUSALS, Taken};
 pub use inproc::{InProcLink, InProcSender, InProcTransport};
+pub use local::{LocalEndpoint, LocalListener, LocalTransport, PeerPolicy};
 pub use outbox::{FrameReceiver, Gauge, OutboxLimits, OutboxUse};
 pub use transport::{FrameSender, Link, Presence, SendFrame, Transport};
 pub use zenoh::{ZenohLogin, ZenohTransport};
@@ -45,3 +50,15 @@ pub use zenoh::{ZenohLogin, ZenohTransport};
 /// A link's number, given by central when the link opens. It is also the high half of every
 /// message id the module on it sends.
 pub type LinkId = u32;
+
+/// The transport that reaches central at `endpoint`: [`LocalTransport`] for `local` and
+/// `local/NAME`, [`ZenohTransport`] for anything else (`tcp/HOST:PORT`, `unixsock-stream/PATH`).
+pub fn transport_for(endpoint: &str) -> Result<std::sync::Arc<dyn Transport>> {
+    if LocalEndpoint::is_local(endpoint) {
+        Ok(std::sync::Arc::new(LocalTransport::new(endpoint)?))
+    } else {
+        Ok(std::sync::Arc::new(ZenohTransport::new(vec![
+            endpoint.to_owned(),
+        ])))
+    }
+}

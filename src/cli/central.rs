@@ -1,4 +1,4 @@
-//! `tca central`: central control over zenoh.
+//! `tca central`: central control, listening on local sockets and zenoh endpoints.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -11,9 +11,16 @@ use tca_central::{CentralConfig, DEFAULT_ENDPOINT};
 
 #[derive(Debug, Args)]
 pub(crate) struct CentralArgs {
-    /// zenoh endpoint to listen on (repeatable).
+    /// Endpoint to listen on (repeatable, any mix): `local` or `local/NAME` (a Unix socket
+    /// for modules on this machine, only this user may connect), or a zenoh endpoint such as
+    /// tcp/0.0.0.0:7447 (modules on any machine).
     #[arg(long, value_name = "ENDPOINT", default_value = DEFAULT_ENDPOINT)]
     listen: Vec<String>,
+    /// Also admit processes of this user id on the local sockets (repeatable); by default only
+    /// central's own user may connect. The socket directory is private to central's user, so
+    /// that user must also let the other one reach it (see TCA_LOCAL_DIR).
+    #[arg(long, value_name = "UID")]
+    local_allow_uid: Vec<u32>,
     /// Write the traffic log (MCAP) to this file. A log already there (say, of a central that
     /// crashed) is kept as FILE-STEM.N.mcap, never overwritten.
     #[arg(long, value_name = "FILE")]
@@ -81,6 +88,7 @@ pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
             max_outbox_bytes: args.max_outbox_bytes,
             max_log_backlog: args.max_log_backlog,
             policy,
+            local_peer_uids: args.local_allow_uid.clone(),
             simulated_time: args.simulated_time,
             ..CentralConfig::default()
         },

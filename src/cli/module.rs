@@ -64,7 +64,7 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
         .clone()
         .or_else(|| std::env::var("TCA_CONNECT").ok())
         .unwrap_or_else(|| args.connect.endpoint_or_default());
-    let connector = Connector::zenoh(endpoint.clone());
+    let connector = Connector::endpoint(endpoint.clone());
     let terrain =
         tca_walk::TerrainChoice::from_args(&args.course, args.terrain.as_deref(), args.seed)?;
     let options = tca_walk::ModuleOptions {

@@ -22,6 +22,11 @@ pub(crate) struct PingArgs {
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
+    /// Ping the echo module of this name, already connected to central (e.g. `tca module echo
+    /// --connect E` in another process), instead of starting an echo in this process. Needs
+    /// --connect.
+    #[arg(long, value_name = "MODULE", requires = "connect")]
+    target: Option<String>,
 }
 
 pub(crate) async fn run(args: PingArgs) -> anyhow::Result<ExitCode> {
@@ -30,11 +35,24 @@ pub(crate) async fn run(args: PingArgs) -> anyhow::Result<ExitCode> {
     }
     let (report, where_) = match &args.connect.connect {
         Some(endpoint) => {
-            let connector = Connector::zenoh(endpoint.clone());
-            let report = tca_ping::run(&connector, args.n, args.payload)
-                .await
-                .with_context(|| format!("ping through central at {endpoint}"))?;
-            (report, format!("central at {endpoint} (zenoh)"))
+            let connector = Connector::endpoint(endpoint.clone());
+            let report = match &args.target {
+                Some(target) => {
+                    tca_ping::run_target(&connector, target, args.n, args.payload).await
+                }
+                None => tca_ping::run(&connector, args.n, args.payload).await,
+            }
+            .with_context(|| format!("ping through central at {endpoint}"))?;
+            let link = if tca_link::LocalEndpoint::is_local(endpoint) {
+                "local socket"
+            } else {
+                "zenoh"
+            };
+            let echo = match &args.target {
+                Some(t) => format!(", echo {t} in its own process"),
+                None => String::new(),
+            };
+            (report, format!("central at {endpoint} ({link}{echo})"))
         }
         None => {
             let central = tca_central::start(StartOptions::default()).await?;

@@ -24,7 +24,11 @@ pub(crate) async fn run(args: UpArgs) -> anyhow::Result<ExitCode> {
             kept.display()
         );
     }
-    eprintln!("central listening on {}", launch.central.listen.join(", "));
+    eprintln!(
+        "central listening on {}; modules connect at {}",
+        up.endpoints().join(", "),
+        up.module_endpoint()
+    );
     eprintln!("started {} modules", up.modules());
     tokio::signal::ctrl_c()
         .await

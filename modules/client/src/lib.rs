@@ -33,12 +33,14 @@
 //!   inspection, kill, constraints, exception handlers, monitors) and the link's life cycle,
 //!   receiving and dispatch to handlers, the simulated clock.
 //! - [`context`]: [`Context`], what a handler gets: sends attach to the handler's task node.
-//! - [`connector`]: [`Connector`]: any `tca-link` transport (in-process, zenoh).
+//! - [`connector`]: [`Connector`]: any `tca-link` transport (in-process, local socket, zenoh),
+//!   or one chosen by endpoint.
 //! - [`credentials`]: the identity/secret of the hello and the zenoh login, in code or from
 //!   `TCA_IDENTITY`/`TCA_SECRET` and `TCA_ZENOH_USER`/`TCA_ZENOH_PASSWORD`.
 //! - [`compute_time`]: [`ComputeTime`], what a handler charges to simulated time.
 //! - `handler`: type erasure of handlers.
-//! - [`rejoin`]: joining a restarted central again (transports where central can die alone).
+//! - [`rejoin`]: joining a restarted central again (transports where central can die alone:
+//!   zenoh and the local socket).
 //! - [`error`]: [`ModuleError`] and [`HandlerError`].
 //!
 //! Message classes are checked when the code compiles: a goal is sent with `goal`, a query

@@ -1,4 +1,4 @@
-//! Rejoining central after it died and came back (zenoh links only).
+//! Rejoining central after it died and came back (zenoh and local links).
 //!
 //! A module over zenoh watches central's liveliness token. When the token is withdrawn, central
 //! is gone (its process was killed, or the network dropped): the module goes *offline*. What
@@ -7,6 +7,10 @@
 //! its running handlers (their ends would mean nothing to a new central), and refuses new
 //! sends with the same error. Its zenoh session meanwhile keeps trying to reach the router,
 //! backing off (see `tca_link::zenoh::RETRY_PERIOD_INIT_MS`).
+//!
+//! Over the local link the same happens when central's socket ends (EOF): the link says
+//! central is down at once, connects again with the same backoff, and says it is up when a
+//! central accepts the connection again.
 //!
 //! When central's token is back, the module says hello again and registers the same handlers;
 //! when central welcomes it, it is *online* again and serves as before. Until then it repeats
@@ -98,6 +102,10 @@ impl Rejoiner {
 
     /// Central appeared or vanished.
     pub(crate) fn on_presence(&mut self, module: &Module, presence: Presence) {
+        if module.is_closed() {
+            // Closed by the module itself: nothing to rejoin.
+            return;
+        }
         match (presence, &self.phase) {
             (Presence::Down, Phase::Online) => {
                 tracing::warn!(module = %module.name(), "central went away; failing what was in flight and waiting for it to come back");

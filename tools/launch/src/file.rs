@@ -2,7 +2,11 @@
 //!
 //! ```toml
 //! [central]
-//! listen = ["tcp/127.0.0.1:7447"]   # zenoh endpoints (default tcp/127.0.0.1:7447)
+//! listen = ["tcp/127.0.0.1:7447"]   # endpoints: zenoh ones, local or local/NAME (default
+//!                                   # tcp/127.0.0.1:7447)
+//! local_modules = true              # the modules started here connect over a local socket
+//!                                   # (the first local endpoint of listen, else a private
+//!                                   # local/up-<pid> added for them); false: listen[0]
 //! log = "out/traffic.mcap"          # optional traffic log
 //! policy = "policy.toml"            # optional: who may connect and what they may do
 //! simulated_time = true             # optional: central keeps the simulated clock
@@ -38,9 +42,14 @@ pub struct Launch {
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CentralSection {
-    /// zenoh endpoints to listen on.
+    /// Endpoints to listen on: zenoh ones (`tcp/HOST:PORT`) and local ones (`local`,
+    /// `local/NAME`).
     #[serde(default = "default_listen")]
     pub listen: Vec<String>,
+    /// The modules this file starts connect over a local socket (default): the first local
+    /// endpoint of `listen`, or one added for them. False: they connect to `listen[0]`.
+    #[serde(default = "yes")]
+    pub local_modules: bool,
     /// Traffic log file.
     pub log: Option<PathBuf>,
     /// Policy file (authentication, authorisation, limits), as `tca central --policy`.
@@ -54,6 +63,7 @@ impl Default for CentralSection {
     fn default() -> Self {
         CentralSection {
             listen: default_listen(),
+            local_modules: true,
             log: None,
             policy: None,
             simulated_time: false,
@@ -142,6 +152,10 @@ mod tests {
         assert_eq!(l.modules.len(), 1);
         assert_eq!(l.central.listen, vec!["tcp/127.0.0.1:7500"]);
         assert!(l.modules[0].restart, "modules restart by default");
+        assert!(
+            l.central.local_modules,
+            "modules connect locally by default"
+        );
         assert_eq!(l.central.policy, None);
         let l = Launch::parse(
             "[central]\npolicy=\"p.toml\"\n[[module]]\nname=\"echo\"\nrestart=false\n",

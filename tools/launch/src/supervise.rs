@@ -1,6 +1,8 @@
 //! Starting what a launch file names: central in this process, each module as a process of
 //! its own (a built-in one as `EXE module NAME --connect ENDPOINT ARGS...`, any other by its
-//! `command`, with `TCA_CONNECT=ENDPOINT`). A module whose process dies (a crash, `kill -9`)
+//! `command`, with `TCA_CONNECT=ENDPOINT`). ENDPOINT is a local socket unless the file says
+//! `local_modules = false`: the first local endpoint central listens on, or `local/up-<pid>`,
+//! added for the modules. A module whose process dies (a crash, `kill -9`)
 //! is started again, after a pause that doubles from [`FIRST_PAUSE`] up to
 //! [`LONGEST_PAUSE`] while it keeps dying within [`HEALTHY_RUN`] of starting.
 
@@ -25,15 +27,21 @@ pub const HEALTHY_RUN: Duration = Duration::from_secs(60);
 /// A running launch file: central and the supervised module processes.
 pub struct Up {
     central: RunningCentral,
+    module_endpoint: String,
     stop: watch::Sender<bool>,
     supervisors: Vec<JoinHandle<()>>,
     kept_log: Option<PathBuf>,
 }
 
 impl Up {
-    /// Where the modules reach central (the launch file's first endpoint).
+    /// Every endpoint central listens on.
     pub fn endpoints(&self) -> Vec<String> {
         self.central.listening()
+    }
+
+    /// Where the modules started from the launch file reach central.
+    pub fn module_endpoint(&self) -> &str {
+        &self.module_endpoint
     }
 
     /// Where the previous traffic log was kept, if central's log file existed.
@@ -68,9 +76,22 @@ pub async fn up(launch: &Launch, exe: &Path) -> Result<Up, LaunchError> {
         Some(path) => Some(Arc::new(Policy::load(path)?)),
         None => None,
     };
+    let mut listen = launch.central.listen.clone();
+    let endpoint = if launch.central.local_modules {
+        match listen.iter().find(|e| is_local(e)) {
+            Some(e) => e.clone(),
+            None => {
+                let e = format!("local/up-{}", std::process::id());
+                listen.push(e.clone());
+                e
+            }
+        }
+    } else {
+        listen[0].clone()
+    };
     let central = tca_central::start(StartOptions {
         log: launch.central.log.clone(),
-        listen: launch.central.listen.clone(),
+        listen: listen.clone(),
         config: CentralConfig {
             policy,
             simulated_time: launch.central.simulated_time,
@@ -78,8 +99,7 @@ pub async fn up(launch: &Launch, exe: &Path) -> Result<Up, LaunchError> {
         },
     })
     .await?;
-    let endpoint = launch.central.listen[0].clone();
-    tracing::info!(endpoints = ?launch.central.listen, "central listening");
+    tracing::info!(endpoints = ?listen, modules = %endpoint, "central listening");
     let (stop, stop_rx) = watch::channel(false);
     let mut supervisors = Vec::new();
     for m in &launch.modules {
@@ -93,10 +113,16 @@ pub async fn up(launch: &Launch, exe: &Path) -> Result<Up, LaunchError> {
     }
     Ok(Up {
         central,
+        module_endpoint: endpoint,
         stop,
         supervisors,
         kept_log,
     })
+}
+
+/// Whether `endpoint` is a local socket's (`local`, `local/NAME`).
+fn is_local(endpoint: &str) -> bool {
+    endpoint == "local" || endpoint.starts_with("local/")
 }
 
 /// How one module of the launch file is started.

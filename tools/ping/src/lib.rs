@@ -12,4 +12,4 @@ pub mod echo;
 pub mod ping;
 
 pub use echo::{Ping, PingGoal};
-pub use ping::{PingReport, report, run};
+pub use ping::{PingReport, report, run, run_target};

@@ -33,6 +33,49 @@ pub async fn run(
     let pinger = Module::builder(format!("pinger-{pid}"))
         .connect(connector)
         .await?;
+    time(&pinger, n, payload).await
+}
+
+/// Connects a pinger through `connector` and times `n` queries to the echo module named
+/// `target`, already connected (say, in another process: `tca module echo`).
+pub async fn run_target(
+    connector: &Connector,
+    target: &str,
+    n: usize,
+    payload: usize,
+) -> Result<PingReport, ModuleError> {
+    let pinger = Module::builder(format!("pinger-{}", std::process::id()))
+        .connect(connector)
+        .await?;
+    let registry = pinger.registry().await?;
+    let handler = registry
+        .entries
+        .iter()
+        .find(|e| e.name.as_str() == <Ping as tca_messages::Message>::NAME);
+    match handler {
+        Some(e) if e.handler.as_str() == target && e.connected => {}
+        Some(e) => {
+            return Err(ModuleError::Usage(format!(
+                "the ping messages are handled by module {}{}, not by {target}; start \
+                 `tca module echo` or give --target {}",
+                e.handler,
+                if e.connected { "" } else { " (down)" },
+                e.handler
+            )));
+        }
+        None => {
+            return Err(ModuleError::Usage(format!(
+                "no module handles the ping messages ({}); start one with `tca module echo \
+                 --connect ENDPOINT` (looking for --target {target})",
+                connector.describe()
+            )));
+        }
+    }
+    time(&pinger, n, payload).await
+}
+
+/// Warms up, then times `n` queries of `payload` bytes from `pinger`; closes it.
+async fn time(pinger: &Module, n: usize, payload: usize) -> Result<PingReport, ModuleError> {
     let body = vec![0xa5; payload];
     let warmup = (n / 10).clamp(10, 1000);
     for seq in 0..warmup as u64 {
