@@ -49,6 +49,17 @@ pub mod names {
     /// Module -> central, on simulated time: the sending handler now waits for the end of a
     /// task ([`super::Await`]); no answer.
     pub const AWAIT: &str = "tca.await";
+    /// Module -> central: kill the task tree node a goal or command created, by the id of its
+    /// message ([`super::KillTask`]).
+    pub const KILL_TASK: &str = "tca.killTask";
+    /// Module -> central: kill every task tree (an emergency stop); answered with the number
+    /// of trees killed (`u64`).
+    pub const KILL_ALL: &str = "tca.killAll";
+    /// Module -> central: copy to the module the traffic of some message names
+    /// ([`super::Tap`]).
+    pub const TAP: &str = "tca.tap";
+    /// Central -> module: a copy of a message of a name it taps ([`super::Tapped`]).
+    pub const TAPPED: &str = "tca.tapped";
 }
 
 /// Name of the pseudo-module central uses as sender of its own messages.
@@ -254,6 +265,30 @@ pub struct Await {
     pub task: crate::id::MessageId,
 }
 
+/// Kill the task-tree node a goal or command created, and its subtree.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct KillTask {
+    /// The id of the message that created the task.
+    pub task: crate::id::MessageId,
+}
+
+/// Copy to the sending module every message of these names that modules send central or
+/// central sends on its own (queries, goals, commands, informs, exceptions and their answers
+/// and errors; never control traffic), as [`Tapped`] notices, until the module leaves. A new
+/// tap replaces the module's previous one.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Tap {
+    /// The names; empty for every name.
+    pub names: Vec<MessageName>,
+}
+
+/// A copy of a tapped message.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Tapped {
+    /// The message as central received (or sent) it.
+    pub envelope: crate::envelope::Envelope,
+}
+
 /// Add a temporal constraint between existing nodes.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Constrain {
@@ -319,11 +354,17 @@ pub enum ControlKind {
     Monitor,
     /// [`names::AWAIT`].
     Await,
+    /// [`names::KILL_TASK`].
+    KillTask,
+    /// [`names::KILL_ALL`].
+    KillAll,
+    /// [`names::TAP`].
+    Tap,
 }
 
 impl ControlKind {
     /// Every kind of control request.
-    pub const ALL: [ControlKind; 12] = [
+    pub const ALL: [ControlKind; 15] = [
         ControlKind::Hello,
         ControlKind::HelloAuth,
         ControlKind::Register,
@@ -336,6 +377,9 @@ impl ControlKind {
         ControlKind::Retry,
         ControlKind::Monitor,
         ControlKind::Await,
+        ControlKind::KillTask,
+        ControlKind::KillAll,
+        ControlKind::Tap,
     ];
 
     /// The wire name.
@@ -353,6 +397,9 @@ impl ControlKind {
             ControlKind::Retry => names::RETRY,
             ControlKind::Monitor => names::MONITOR,
             ControlKind::Await => names::AWAIT,
+            ControlKind::KillTask => names::KILL_TASK,
+            ControlKind::KillAll => names::KILL_ALL,
+            ControlKind::Tap => names::TAP,
         }
     }
 
@@ -379,6 +426,8 @@ impl ControlKind {
         matches!(
             self,
             ControlKind::Kill
+                | ControlKind::KillTask
+                | ControlKind::KillAll
                 | ControlKind::Constrain
                 | ControlKind::OnException
                 | ControlKind::Retry
@@ -422,6 +471,12 @@ pub enum ControlRequest {
     Monitor(Monitor),
     /// The sending handler waits for a task's end (simulated time); not answered.
     Await(Await),
+    /// Kill the node a goal or command created, and its subtree; answered with `()`.
+    KillTask(KillTask),
+    /// Kill every task tree; answered with the number of trees killed (`u64`).
+    KillAll,
+    /// Copy the traffic of some names to the sender; answered with `()`.
+    Tap(Tap),
 }
 
 /// Why a control request could not be read.
@@ -462,6 +517,9 @@ impl ControlRequest {
             ControlRequest::Retry(_) => ControlKind::Retry,
             ControlRequest::Monitor(_) => ControlKind::Monitor,
             ControlRequest::Await(_) => ControlKind::Await,
+            ControlRequest::KillTask(_) => ControlKind::KillTask,
+            ControlRequest::KillAll => ControlKind::KillAll,
+            ControlRequest::Tap(_) => ControlKind::Tap,
         }
     }
 
@@ -477,18 +535,23 @@ impl ControlRequest {
             ControlRequest::Hello(h) => enc(h),
             ControlRequest::HelloAuth(h) => enc(h),
             ControlRequest::Register(r) => enc(r),
-            ControlRequest::Registry | ControlRequest::Tree | ControlRequest::Bye => enc(&()),
+            ControlRequest::Registry
+            | ControlRequest::Tree
+            | ControlRequest::Bye
+            | ControlRequest::KillAll => enc(&()),
             ControlRequest::Kill(k) => enc(k),
             ControlRequest::Constrain(c) => enc(c),
             ControlRequest::OnException(o) => enc(o),
             ControlRequest::Retry(r) => enc(r),
             ControlRequest::Monitor(m) => enc(m),
             ControlRequest::Await(a) => enc(a),
+            ControlRequest::KillTask(k) => enc(k),
+            ControlRequest::Tap(t) => enc(t),
         }
     }
 
     /// Reads a request from its wire name and data. Requests without data (registry, tree,
-    /// goodbye) ignore what they carry.
+    /// goodbye, kill all) ignore what they carry.
     pub fn decode(name: &str, data: &[u8]) -> Result<Self, ControlError> {
         let kind = ControlKind::from_name(name).ok_or_else(|| ControlError::Unknown {
             name: name.to_owned(),
@@ -515,6 +578,9 @@ impl ControlRequest {
             ControlKind::Retry => ControlRequest::Retry(dec(kind, data)?),
             ControlKind::Monitor => ControlRequest::Monitor(dec(kind, data)?),
             ControlKind::Await => ControlRequest::Await(dec(kind, data)?),
+            ControlKind::KillTask => ControlRequest::KillTask(dec(kind, data)?),
+            ControlKind::KillAll => ControlRequest::KillAll,
+            ControlKind::Tap => ControlRequest::Tap(dec(kind, data)?),
         })
     }
 }
@@ -530,6 +596,8 @@ pub enum ControlNotice {
     Cancel(Cancel),
     /// A goal or command the module asked to hear about ended.
     TaskEnded(TaskEnded),
+    /// A copy of a message of a name the module taps.
+    Tapped(Box<Tapped>),
 }
 
 impl ControlNotice {
@@ -539,6 +607,7 @@ impl ControlNotice {
             ControlNotice::Welcome(_) => names::WELCOME,
             ControlNotice::Cancel(_) => names::CANCEL,
             ControlNotice::TaskEnded(_) => names::TASK_ENDED,
+            ControlNotice::Tapped(_) => names::TAPPED,
         }
     }
 
@@ -549,6 +618,7 @@ impl ControlNotice {
             ControlNotice::Welcome(w) => enc(w),
             ControlNotice::Cancel(c) => enc(c),
             ControlNotice::TaskEnded(t) => enc(t),
+            ControlNotice::Tapped(t) => enc(t.as_ref()),
         }
     }
 
@@ -560,6 +630,7 @@ impl ControlNotice {
             names::WELCOME => ControlNotice::Welcome(dec(data).ok()?),
             names::CANCEL => ControlNotice::Cancel(dec(data).ok()?),
             names::TASK_ENDED => ControlNotice::TaskEnded(dec(data).ok()?),
+            names::TAPPED => ControlNotice::Tapped(Box::new(dec(data).ok()?)),
             _ => return None,
         })
     }
@@ -585,6 +656,13 @@ mod tests {
             ControlRequest::Retry(Retry { node: NodeId(2) }),
             ControlRequest::Registry,
             ControlRequest::Bye,
+            ControlRequest::KillAll,
+            ControlRequest::KillTask(KillTask {
+                task: crate::id::MessageId::new(3, 7),
+            }),
+            ControlRequest::Tap(Tap {
+                names: vec![MessageName::new("bodyMove").unwrap()],
+            }),
         ];
         for r in requests {
             let data = r.encode_data().unwrap();

@@ -17,6 +17,7 @@
 //! - [`format`]: [`DataFormat`], a type's serde shape, compared field by field.
 //! - `trace`: derives a [`DataFormat`] by driving the type's `Deserialize` impl.
 //! - [`value`]: decoding data through a format without its Rust type (for the log viewer).
+//! - `from_json`: data from JSON through a format, encoded as postcard (`tca call`, `tca send`).
 //! - [`control`]: payloads of central's own `tca.*` control traffic.
 //! - [`route_error`]: [`RouteError`], what central answers when it cannot route a message.
 //! - [`sim_time`]: [`HandlingClock`], when a module's handlers start in simulated time.
@@ -29,6 +30,7 @@ pub mod control;
 pub mod envelope;
 pub mod error;
 pub mod format;
+mod from_json;
 pub mod id;
 pub mod message;
 pub mod route_error;

@@ -411,8 +411,9 @@ impl fmt::Display for Value {
 
 impl Value {
     /// Converts to JSON: structs become objects, variants `{"Variant": body}` (unit variants a
-    /// string), maps with string keys objects and others arrays of pairs, bytes arrays of numbers,
-    /// non-finite floats strings.
+    /// string), maps with string, character or integer keys objects (keys as text, as serde_json
+    /// writes them) and others arrays of pairs, bytes arrays of numbers, non-finite floats
+    /// strings.
     pub fn to_json(&self) -> serde_json::Value {
         use serde_json::Value as J;
         match self {
@@ -434,14 +435,17 @@ impl Value {
             Value::Option(Some(v)) => v.to_json(),
             Value::Seq(items) => J::Array(items.iter().map(Value::to_json).collect()),
             Value::Map(items) => {
-                if items.iter().all(|(k, _)| matches!(k, Value::Str(_))) {
+                let key_text = |k: &Value| match k {
+                    Value::Str(s) => Some(s.clone()),
+                    Value::Char(c) => Some(c.to_string()),
+                    Value::Int(_) | Value::UInt(_) => Some(k.to_string()),
+                    _ => None,
+                };
+                if items.iter().all(|(k, _)| key_text(k).is_some()) {
                     J::Object(
                         items
                             .iter()
-                            .map(|(k, v)| match k {
-                                Value::Str(s) => (s.clone(), v.to_json()),
-                                other => (other.to_string(), v.to_json()),
-                            })
+                            .map(|(k, v)| (key_text(k).unwrap_or_default(), v.to_json()))
                             .collect(),
                     )
                 } else {

@@ -179,6 +179,7 @@ impl Central {
         for envelope in self.clock.module_gone(&module) {
             self.hand_back(&module, envelope);
         }
+        self.drop_tap(&module);
         self.fail_queries_of(&module, out);
         self.requeue_tasks_of(&module, out);
         self.requeue_exceptions_of(&module);

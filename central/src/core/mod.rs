@@ -14,6 +14,8 @@
 //! - `quota`: per-sender accounting of what central holds, and its limits;
 //! - `congestion`: modules that do not keep up with what central sends them (their outbox);
 //! - `permissions`: the registration policy applied to what a module sends;
+//! - `taps`: copies of some names' traffic for the modules that tap them, and the task
+//!   controls of the command line (kill a task by its message, kill every tree);
 //! - `tree`: the adapter to `tca-task-tree`;
 //! - `clock`: the simulated clock, when central keeps one: events released in simulated-time
 //!   order, one at a time, while every handler has finished or waits.
@@ -29,6 +31,7 @@ mod permissions;
 mod quota;
 mod registry;
 mod routing;
+mod taps;
 mod tasks;
 mod tree;
 mod waiting;
@@ -90,6 +93,8 @@ pub struct Central {
     attachments: exceptions::Attachments,
     exceptions: HashMap<MessageId, exceptions::OpenException>,
     monitors: Vec<monitors::MonitorState>,
+    /// What each module taps (see `taps`).
+    taps: HashMap<ModuleName, taps::TapSet>,
     /// What each sending module has held in central (see `quota`).
     queued: HashMap<ModuleName, Usage>,
     /// The most one sender has had held at once (messages and bytes, each on its own).
@@ -177,6 +182,7 @@ impl Central {
             attachments: HashMap::default(),
             exceptions: HashMap::default(),
             monitors: Vec::new(),
+            taps: HashMap::default(),
             queued: HashMap::default(),
             queued_high: Usage::default(),
             central_name: ModuleName::new(CENTRAL).unwrap_or_else(|_| unreachable!()),
@@ -338,23 +344,22 @@ impl Central {
         if let Err(error) = self.permit(link, &module, &envelope, out) {
             return self.send_error(link, &envelope, error, out);
         }
-        if self.clock.on {
-            if self.clock.sent(&envelope) {
-                // An inform's acknowledgement or a handler's await: bookkeeping only.
-                return;
-            }
-            if clock_event(&envelope) {
-                let stamp = self.clock.release_stamp(envelope.timestamp_ns);
-                self.clock.push(
-                    stamp,
-                    clock::Deferred::Frame {
-                        link,
-                        module,
-                        envelope,
-                    },
-                );
-                return;
-            }
+        if self.clock.on && self.clock.sent(&envelope) {
+            // An inform's acknowledgement or a handler's await: bookkeeping only.
+            return;
+        }
+        self.tap_copy(&envelope, out);
+        if self.clock.on && clock_event(&envelope) {
+            let stamp = self.clock.release_stamp(envelope.timestamp_ns);
+            self.clock.push(
+                stamp,
+                clock::Deferred::Frame {
+                    link,
+                    module,
+                    envelope,
+                },
+            );
+            return;
         }
         self.route(link, module, envelope, out);
     }
@@ -503,6 +508,9 @@ impl Central {
             if followed {
                 self.clock.started(envelope, module);
             }
+        }
+        if envelope.sender == self.central_name {
+            self.tap_copy(envelope, out);
         }
         match encode(envelope) {
             Ok(frame) => {

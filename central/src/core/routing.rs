@@ -201,6 +201,17 @@ impl Central {
             ControlRequest::Kill(kill) => self
                 .kill_node(kill.node, Some(envelope.id), out)
                 .map_err(|reason| RouteError::Tree { reason }),
+            ControlRequest::KillTask(kill) => self
+                .kill_task(kill.task, Some(envelope.id), out)
+                .map_err(|reason| RouteError::Tree { reason }),
+            ControlRequest::KillAll => {
+                let killed = self.kill_all(Some(envelope.id), out);
+                self.reply_control(link, &envelope, &killed, out);
+                return;
+            }
+            ControlRequest::Tap(tap) => self
+                .set_tap(&module, tap)
+                .map_err(|reason| RouteError::Refused { reason }),
             ControlRequest::OnException(on) => self
                 .attach_exception_handler(&module, on)
                 .map_err(|reason| RouteError::Refused { reason }),

@@ -15,6 +15,10 @@ use super::*;
 #[path = "congestion_tests.rs"]
 mod congestion;
 
+// Taps and the command line's task controls, with this file's harness.
+#[path = "taps_tests.rs"]
+mod taps;
+
 const MS: u64 = 1_000_000;
 
 #[derive(Serialize, Deserialize)]
