@@ -6,11 +6,14 @@ use std::time::Duration;
 
 use serde::de::DeserializeOwned;
 use tca_messages::control::{
-    Constrain, ControlRequest, Kill, Monitor, MonitorAction, OnException, Registry, Retry, TreeView,
+    Constrain, ControlRequest, Kill, KillTask, Monitor, MonitorAction, OnException, Registry,
+    Retry, Tap, TreeView,
 };
 use tca_messages::{
-    Class, ConstraintSpec, Message, MessageName, NodeId, decode_data, encode_data, kind,
+    Class, ConstraintSpec, Envelope, Message, MessageId, MessageName, NodeId, decode_data,
+    encode_data, kind,
 };
+use tokio::sync::mpsc;
 
 use super::{Module, lock, route_error};
 use crate::error::{ModuleError, Result};
@@ -29,6 +32,36 @@ impl Module {
     /// Kills a node and its subtree.
     pub async fn kill(&self, node: NodeId) -> Result<()> {
         self.control(ControlRequest::Kill(Kill { node })).await
+    }
+
+    /// Kills the task a goal or command created (by the id of its message), and its subtree.
+    pub async fn kill_task(&self, task: MessageId) -> Result<()> {
+        self.control(ControlRequest::KillTask(KillTask { task }))
+            .await
+    }
+
+    /// Kills every task tree (an emergency stop); returns how many trees there were. Central
+    /// kills them all before it starts anything their end frees.
+    pub async fn kill_all(&self) -> Result<u64> {
+        self.control(ControlRequest::KillAll).await
+    }
+
+    /// Asks central for a copy of every message of these names (every name when empty) that
+    /// modules send it or it sends on its own (not control traffic), from now until the
+    /// module leaves or taps again (a new tap replaces this one). The copies arrive in the
+    /// returned [`Tapping`], in the order central saw them.
+    pub async fn tap(&self, names: &[&str]) -> Result<Tapping> {
+        let names = names
+            .iter()
+            .map(|n| MessageName::new(*n).map_err(|e| ModuleError::Usage(e.to_string())))
+            .collect::<Result<Vec<_>>>()?;
+        let (tx, rx) = mpsc::unbounded_channel();
+        *lock(&self.shared.tap) = Some(tx);
+        if let Err(e) = self.control::<()>(ControlRequest::Tap(Tap { names })).await {
+            *lock(&self.shared.tap) = None;
+            return Err(e);
+        }
+        Ok(Tapping { rx })
     }
 
     /// Attaches this module as the handler of exception `E` raised at `node` or below (it must
@@ -182,5 +215,19 @@ impl Module {
         let mut online = self.shared.online_signal.subscribe();
         let wait = online.wait_for(|_| self.is_online());
         matches!(tokio::time::timeout(timeout, wait).await, Ok(Ok(_)))
+    }
+}
+
+/// Copies of tapped messages ([`Module::tap`]).
+#[derive(Debug)]
+pub struct Tapping {
+    rx: mpsc::UnboundedReceiver<Envelope>,
+}
+
+impl Tapping {
+    /// The next tapped message as central saw it; `None` once the link has closed or
+    /// another tap replaced this one.
+    pub async fn next(&mut self) -> Option<Envelope> {
+        self.rx.recv().await
     }
 }

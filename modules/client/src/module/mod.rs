@@ -30,6 +30,7 @@ use tokio::task::AbortHandle;
 use crate::error::{ModuleError, Result};
 use crate::handler::HandlerEntry;
 
+pub use control::Tapping;
 pub use send::{raise_action, send_action};
 
 /// How long a query waits for its answer unless told otherwise.
@@ -51,6 +52,8 @@ pub(crate) struct Shared {
     watchers: Mutex<HashMap<MessageId, oneshot::Sender<Result<TaskOutcome>>>>,
     /// Running handlers of task nodes, to stop them when central cancels the node.
     running: Mutex<HashMap<NodeId, AbortHandle>>,
+    /// Where copies of tapped messages go (see [`Module::tap`]).
+    tap: Mutex<Option<tokio::sync::mpsc::UnboundedSender<Envelope>>>,
     handlers: HashMap<MessageName, HandlerEntry>,
     pub(crate) query_timeout: Duration,
     /// Queries are sent again this many times when their answering module dies.
@@ -180,6 +183,7 @@ impl Module {
                 pending: Mutex::new(HashMap::new()),
                 watchers: Mutex::new(HashMap::new()),
                 running: Mutex::new(HashMap::new()),
+                tap: Mutex::new(None),
                 handlers: settings.handlers,
                 query_timeout: settings.query_timeout,
                 requery_after_crash: settings.requery_after_crash,

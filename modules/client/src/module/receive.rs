@@ -130,6 +130,15 @@ impl Module {
                     }
                 }
             }
+            Some(ControlNotice::Tapped(tapped)) => {
+                let mut tap = lock(&self.shared.tap);
+                if let Some(tx) = tap.as_ref()
+                    && tx.send(tapped.envelope).is_err()
+                {
+                    // Nobody reads the copies any more.
+                    *tap = None;
+                }
+            }
             _ => tracing::debug!(name = %envelope.name, "control message ignored"),
         }
     }
@@ -234,6 +243,8 @@ pub(super) fn fail_in_flight(shared: &Shared, error: impl Fn() -> ModuleError) {
     for (_, h) in lock(&shared.running).drain() {
         h.abort();
     }
+    // The tap ends with the link (a central that comes back knows nothing of it).
+    lock(&shared.tap).take();
 }
 
 /// The next change of central's presence; never, without a presence feed.
