@@ -1,0 +1,359 @@
+//! Same-machine link benchmarks: query round trips and goal throughput through central over
+//! the local link (Unix socket), beside in-process and zenoh tcp loopback, logging on; each
+//! beside raw baselines measured in the same run (a tokio channel round trip, a raw Unix socket
+//! echo round trip).
+//!
+//! Central runs as its own process (`tca central --listen local/... --listen tcp/... --log`),
+//! the echo module as another (`tca module echo`), and the pinger here: three processes, as
+//! CMU IPC's two-module test through its central. Goal throughput: a sender and a sink here,
+//! each on its own link to the central process. Besides criterion's figures, each routed
+//! round trip prints its p50 and p99 over 20,000 samples.
+//!
+//! Run: `cargo bench --bench local_link` (figures in BENCHMARKS.md, "Same-machine link").
+
+use std::io::{Read, Write};
+use std::process::{Child, Command, Stdio};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+
+use bytes::Bytes;
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use tca_central::StartOptions;
+use tca_messages::RouteError;
+use tca_module::{Connector, Module, ModuleError};
+use tca_ping::echo::{self, Ping, PingGoal};
+use tokio::runtime::Runtime;
+use tokio::sync::{Notify, mpsc};
+
+/// The allocator the `tca` command uses, so that what is measured here is what it runs.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+/// Samples of the percentile pass after each routed round trip.
+const PERCENTILE_SAMPLES: usize = 20_000;
+
+fn runtime() -> Runtime {
+    tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+        .expect("runtime")
+}
+
+/// A `tca` child process, killed when dropped.
+struct Process(Child);
+
+impl Process {
+    fn spawn(args: &[&str]) -> Self {
+        let child = Command::new(env!("CARGO_BIN_EXE_tca"))
+            .args(args)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("tca starts");
+        Process(child)
+    }
+}
+
+impl Drop for Process {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Central as its own process, listening on a local socket and on zenoh tcp, logging.
+struct CentralProcess {
+    local: String,
+    zenoh: String,
+    _process: Process,
+    _dir: tempfile::TempDir,
+}
+
+fn central_process() -> CentralProcess {
+    let dir = tempfile::tempdir().unwrap();
+    let local = format!("local/bench-{}", std::process::id());
+    let zenoh = tca_link::net::free_loopback_endpoint().expect("a free port");
+    let log = dir.path().join("bench.mcap");
+    let process = Process::spawn(&[
+        "central",
+        "--listen",
+        &local,
+        "--listen",
+        &zenoh,
+        "--log",
+        log.to_str().unwrap(),
+    ]);
+    CentralProcess {
+        local,
+        zenoh,
+        _process: process,
+        _dir: dir,
+    }
+}
+
+/// Connects a module, retrying while central is still starting.
+async fn connect_retrying(connector: &Connector, name: &str) -> Module {
+    for _ in 0..300 {
+        if let Ok(m) = Module::builder(name).connect(connector).await {
+            return m;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    panic!("cannot connect {name} to {}", connector.describe());
+}
+
+/// Waits until the ping messages are handled by a connected module called `echo`.
+async fn wait_for_echo(pinger: &Module) {
+    for _ in 0..300 {
+        let registry = pinger.registry().await.expect("registry");
+        if registry
+            .entries
+            .iter()
+            .any(|e| e.name.as_str() == "tca-ping" && e.handler.as_str() == "echo" && e.connected)
+        {
+            return;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    panic!("the echo module did not register");
+}
+
+fn ping() -> Ping {
+    Ping {
+        seq: 1,
+        payload: vec![0; 16],
+    }
+}
+
+/// Baseline: a request/response over two tokio channels between two tasks.
+fn raw_tokio(c: &mut Criterion, rt: &Runtime) {
+    let (req_tx, mut req_rx) = mpsc::unbounded_channel::<Bytes>();
+    let (rep_tx, rep_rx) = mpsc::unbounded_channel::<Bytes>();
+    rt.spawn(async move {
+        while let Some(b) = req_rx.recv().await {
+            let _ = rep_tx.send(b);
+        }
+    });
+    let rep_rx = Arc::new(tokio::sync::Mutex::new(rep_rx));
+    c.bench_function("baseline/tokio_channel_round_trip", |b| {
+        b.to_async(rt).iter(|| {
+            let req_tx = req_tx.clone();
+            let rep_rx = rep_rx.clone();
+            async move {
+                req_tx.send(Bytes::from_static(b"ping")).unwrap();
+                rep_rx.lock().await.recv().await.unwrap()
+            }
+        })
+    });
+}
+
+/// Baseline: a 4-byte length and a 16-byte frame written to a Unix socket, echoed back by a
+/// blocking thread, read back by a tokio task: one round trip of the local link's wire, with
+/// no central.
+fn raw_unix_socket(c: &mut Criterion, rt: &Runtime) {
+    let (server, client) = std::os::unix::net::UnixStream::pair().unwrap();
+    std::thread::spawn(move || {
+        let mut server = server;
+        let mut buf = [0u8; 20];
+        while server.read_exact(&mut buf).is_ok() {
+            if server.write_all(&buf).is_err() {
+                return;
+            }
+        }
+    });
+    client.set_nonblocking(true).unwrap();
+    let client = rt.block_on(async { tokio::net::UnixStream::from_std(client).unwrap() });
+    let client = Arc::new(tokio::sync::Mutex::new(client));
+    c.bench_function("baseline/unix_socket_echo_round_trip", |b| {
+        b.to_async(rt).iter(|| {
+            let client = client.clone();
+            async move {
+                use tokio::io::{AsyncReadExt, AsyncWriteExt};
+                let mut s = client.lock().await;
+                let mut frame = [0u8; 20];
+                frame[..4].copy_from_slice(&16u32.to_le_bytes());
+                s.write_all(&frame).await.unwrap();
+                s.read_exact(&mut frame).await.unwrap();
+                frame
+            }
+        })
+    });
+}
+
+/// Times routed query round trips from `pinger` (criterion), then prints p50/p99.
+fn routed_query(c: &mut Criterion, rt: &Runtime, name: &str, pinger: &Module) {
+    c.bench_function(name, |b| {
+        b.to_async(rt).iter(|| {
+            let pinger = pinger.clone();
+            async move { pinger.query(&ping()).await.unwrap() }
+        })
+    });
+    let report = rt.block_on(async {
+        let mut samples = Vec::with_capacity(PERCENTILE_SAMPLES);
+        for _ in 0..PERCENTILE_SAMPLES {
+            let start = Instant::now();
+            pinger.query(&ping()).await.unwrap();
+            samples.push(start.elapsed());
+        }
+        tca_ping::report(&mut samples)
+    });
+    eprintln!(
+        "{name}: {} samples: min {:.1} µs, p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs",
+        report.n, report.min_us, report.p50_us, report.p99_us, report.max_us
+    );
+}
+
+/// In-process: central, echo and pinger in this process, logging on.
+fn inproc_query(c: &mut Criterion, rt: &Runtime) {
+    let dir = tempfile::tempdir().unwrap();
+    let (central, pinger, _echo) = rt.block_on(async {
+        let central = tca_central::start(StartOptions {
+            log: Some(dir.path().join("bench.mcap")),
+            ..StartOptions::default()
+        })
+        .await
+        .unwrap();
+        let connector = Connector::from(central.in_process());
+        let echo = echo::connect(&connector, "echo").await.unwrap();
+        let pinger = Module::builder("pinger").connect(&connector).await.unwrap();
+        (central, pinger, echo)
+    });
+    routed_query(c, rt, "inproc/routed_query_round_trip", &pinger);
+    rt.block_on(async { central.shutdown().await.unwrap() });
+}
+
+/// Across processes: the echo module as a process of its own connected at `echo_at`, the
+/// pinger here connected at `ping_at`.
+fn cross_process_query(c: &mut Criterion, rt: &Runtime, name: &str, echo_at: &str, ping_at: &str) {
+    // Central is up once the pinger is connected; then the echo can join it.
+    let pinger =
+        rt.block_on(async { connect_retrying(&Connector::endpoint(ping_at), "pinger").await });
+    let _echo = Process::spawn(&["module", "echo", "--connect", echo_at]);
+    rt.block_on(wait_for_echo(&pinger));
+    routed_query(c, rt, name, &pinger);
+    rt.block_on(pinger.close());
+}
+
+/// Goals from a sender to a sink, each on its own link to central at `connector`.
+fn goal_throughput(c: &mut Criterion, rt: &Runtime, name: &str, connector: Connector) {
+    // The sink wakes the timing loop once, when the count reaches the sample's target.
+    let count = Arc::new(AtomicU64::new(0));
+    let target = Arc::new(AtomicU64::new(u64::MAX));
+    let notify = Arc::new(Notify::new());
+    let sink_name = format!("sink-{}", name.replace('/', "-"));
+    let (sender, sink) = rt.block_on(async {
+        let (count, target, notify) = (count.clone(), target.clone(), notify.clone());
+        let sink = Module::builder(sink_name)
+            .capacity(4096)
+            .replace(true)
+            .handle(move |_ctx, _g: PingGoal| {
+                if count.fetch_add(1, Ordering::Relaxed) + 1 >= target.load(Ordering::Relaxed) {
+                    notify.notify_one();
+                }
+                async { Ok(()) }
+            })
+            .connect(&connector)
+            .await
+            .unwrap();
+        let sender = connect_retrying(&connector, "sender").await;
+        (sender, sink)
+    });
+    let mut group = c.benchmark_group("throughput");
+    group.throughput(Throughput::Elements(1));
+    group.sample_size(10);
+    group.bench_function(name, |b| {
+        b.to_async(rt).iter_custom(|iters| {
+            let sender = sender.clone();
+            let count = count.clone();
+            let target = target.clone();
+            let notify = notify.clone();
+            async move {
+                let goal_count = count.load(Ordering::Relaxed) + iters;
+                target.store(goal_count, Ordering::Relaxed);
+                let start = Instant::now();
+                for seq in 0..iters {
+                    // Over its queue limit in central the sender is refused: it waits and
+                    // sends again (backpressure), as a real module would.
+                    while let Err(e) = sender.goal(&PingGoal { seq }) {
+                        match e {
+                            ModuleError::Route(RouteError::OverLimit { .. }) => {
+                                tokio::time::sleep(Duration::from_micros(100)).await
+                            }
+                            other => panic!("sending a goal failed: {other}"),
+                        }
+                    }
+                }
+                while count.load(Ordering::Relaxed) < goal_count {
+                    let _ =
+                        tokio::time::timeout(Duration::from_millis(10), notify.notified()).await;
+                }
+                start.elapsed()
+            }
+        })
+    });
+    group.finish();
+    rt.block_on(async {
+        sender.close().await;
+        sink.close().await;
+    });
+}
+
+fn benches(c: &mut Criterion) {
+    let rt = runtime();
+    raw_tokio(c, &rt);
+    raw_unix_socket(c, &rt);
+    inproc_query(c, &rt);
+    let central = central_process();
+    cross_process_query(
+        c,
+        &rt,
+        "local/routed_query_round_trip",
+        &central.local,
+        &central.local,
+    );
+    cross_process_query(
+        c,
+        &rt,
+        "zenoh/routed_query_round_trip",
+        &central.zenoh,
+        &central.zenoh,
+    );
+    goal_throughput(
+        c,
+        &rt,
+        "local/goal_throughput",
+        Connector::endpoint(&central.local),
+    );
+    goal_throughput(
+        c,
+        &rt,
+        "zenoh/goal_throughput",
+        Connector::endpoint(&central.zenoh),
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let inproc = rt.block_on(async {
+        tca_central::start(StartOptions {
+            log: Some(dir.path().join("bench.mcap")),
+            ..StartOptions::default()
+        })
+        .await
+        .unwrap()
+    });
+    goal_throughput(
+        c,
+        &rt,
+        "inproc/goal_throughput",
+        Connector::from(inproc.in_process()),
+    );
+    rt.block_on(async { inproc.shutdown().await.unwrap() });
+}
+
+criterion_group! {
+    name = local_link_benches;
+    config = Criterion::default().measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
+    targets = benches
+}
+criterion_main!(local_link_benches);
