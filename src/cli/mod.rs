@@ -1,5 +1,6 @@
 //! Command-line parsing and the subcommands.
 
+mod bus;
 mod central;
 mod chaos;
 mod course;
@@ -59,6 +60,18 @@ enum Command {
     /// Built-in courses for multi-legged robots: list them, write them as .asc files.
     #[command(subcommand)]
     Course(course::CourseCommand),
+    /// List the modules of a running system, their messages, formats and JSON templates.
+    List(bus::list::ListArgs),
+    /// Print the traffic of message names as it happens, decoded.
+    Echo(bus::echo::EchoArgs),
+    /// Ask a query, data given as JSON; print the reply as JSON.
+    Call(bus::call::CallArgs),
+    /// Send a goal, command or inform, data given as JSON; print a task's outcome.
+    Send(bus::send::SendArgs),
+    /// Kill a task and its subtree, by node (n5) or by the id of its message (m3.7).
+    Kill(bus::kill::KillArgs),
+    /// Emergency stop: kill every task tree, then send the halt.
+    Stop(bus::stop::StopArgs),
 }
 
 /// Where to find central (shared by the commands that connect).
@@ -163,6 +176,12 @@ pub(crate) fn main() -> ExitCode {
             Command::Map(args) => map::run(args).await,
             Command::Robot(cmd) => robot::run(cmd).await,
             Command::Course(cmd) => course::run(cmd).await,
+            Command::List(args) => bus::list::run(args).await,
+            Command::Echo(args) => bus::echo::run(args).await,
+            Command::Call(args) => bus::call::run(args).await,
+            Command::Send(args) => bus::send::run(args).await,
+            Command::Kill(args) => bus::kill::run(args).await,
+            Command::Stop(args) => bus::stop::run(args).await,
         }
     });
     match result {

@@ -257,6 +257,26 @@ impl SimClock {
             .collect()
     }
 
+    /// Takes the goals and commands queued as they arrived that would become roots of new
+    /// task trees (sent outside any task), in queue order: an emergency stop drops them.
+    pub(super) fn take_root_tasks(&mut self) -> Vec<(LinkId, Envelope)> {
+        let keys: Vec<(u64, u64)> = self
+            .queue
+            .iter()
+            .filter(|(_, e)| {
+                matches!(e, Deferred::Frame { envelope, .. }
+                    if envelope.class.is_task() && envelope.context.is_none())
+            })
+            .map(|(k, _)| *k)
+            .collect();
+        keys.into_iter()
+            .filter_map(|k| match self.queue.remove(&k) {
+                Some(Deferred::Frame { link, envelope, .. }) => Some((link, envelope)),
+                _ => None,
+            })
+            .collect()
+    }
+
     /// Forgets the queued checks of a monitor on `node`.
     pub(super) fn drop_polls(&mut self, node: u64) {
         self.queue

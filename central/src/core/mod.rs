@@ -349,7 +349,10 @@ impl Central {
             return;
         }
         self.tap_copy(&envelope, out);
-        if self.clock.on && clock_event(&envelope) {
+        if self.kill_acts_now(&envelope) {
+            // On the clock's time, so that nothing it sends moves a simulated clock.
+            self.cause_stamp = self.clock.now;
+        } else if self.clock.on && clock_event(&envelope) {
             let stamp = self.clock.release_stamp(envelope.timestamp_ns);
             self.clock.push(
                 stamp,

@@ -4,12 +4,19 @@
 //!
 //! A tapped message is copied, as a [`Tapped`] notice, when a module sends it to central or
 //! when central sends it on its own (an error about it, a monitor's action); never control
-//! traffic. Taps end when their module's link closes. Under a policy, a module taps only names
+//! traffic. Taps end when their module's link closes.
+//!
+//! On the simulated clock, a kill from a tool on the wall clock (a person at the command line)
+//! acts at once instead of waiting its turn in the event queue: an emergency stop cannot wait
+//! for a running handler (a move playing out) to finish. Killing every tree there also drops
+//! the goals and commands still queued that would have started new trees. Under a policy, a module taps only names
 //! it may send, and every name only if its `send` rules include `"*"`.
 
 use rustc_hash::FxHashSet as HashSet;
-use tca_messages::control::{CONTROL_PREFIX, ControlNotice, Tap, Tapped};
-use tca_messages::{Class, Envelope, MessageId, MessageName, ModuleName, NodeId};
+use tca_messages::control::{CONTROL_PREFIX, ControlKind, ControlNotice, Tap, Tapped};
+use tca_messages::{
+    Class, Envelope, MessageId, MessageName, ModuleName, NodeId, RouteError, is_simulated_stamp,
+};
 
 use super::{Action, Central};
 
@@ -88,6 +95,18 @@ impl Central {
         }
     }
 
+    /// Whether `envelope` is a kill from a module on the wall clock while central keeps the
+    /// simulated clock: it acts now, not in its turn.
+    pub(super) fn kill_acts_now(&self, envelope: &Envelope) -> bool {
+        self.clock.on
+            && envelope.class == Class::Control
+            && !is_simulated_stamp(envelope.timestamp_ns)
+            && matches!(
+                ControlKind::from_name(envelope.name.as_str()),
+                Some(ControlKind::Kill | ControlKind::KillTask | ControlKind::KillAll)
+            )
+    }
+
     /// Kills the node of the goal or command that message `task` created.
     pub(super) fn kill_task(
         &mut self,
@@ -132,6 +151,15 @@ impl Central {
             }
         }
         self.tree_events(events, out);
+        if self.clock.on {
+            for (link, envelope) in self.clock.take_root_tasks() {
+                let reason = format!(
+                    "every task tree was killed (an emergency stop) before this {} was started",
+                    envelope.class
+                );
+                self.send_error(link, &envelope, RouteError::Refused { reason }, out);
+            }
+        }
         killed
     }
 }
