@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use bytes::Bytes;
 use futures::future::BoxFuture;
-use tokio::io::{AsyncWriteExt, BufWriter};
+use tokio::io::{AsyncWriteExt, BufReader, BufWriter};
 use tokio::net::UnixStream;
 use tokio::sync::{mpsc, oneshot};
 
@@ -175,7 +175,8 @@ impl Carrier {
 
     /// Carries frames both ways on one connection until it ends or the module stops.
     async fn carry(&mut self, stream: UnixStream) -> End {
-        let (mut r, w) = stream.into_split();
+        let (r, w) = stream.into_split();
+        let mut r = BufReader::with_capacity(WRITE_BUFFER, r);
         let mut w = BufWriter::with_capacity(WRITE_BUFFER, w);
         let down = &self.down;
         let up = &mut self.up;
