@@ -30,3 +30,6 @@ pub use client::LocalTransport;
 pub use endpoint::{DEFAULT_LOCAL_NAME, LOCAL_PROTOCOL, LocalEndpoint, current_uid, runtime_dir};
 pub use peer::PeerPolicy;
 pub use server::{Attach, LocalListener};
+
+#[cfg(test)]
+mod tests;
