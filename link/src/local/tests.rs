@@ -14,11 +14,14 @@ use crate::outbox::{FrameReceiver, Gauge, OutboxLimits};
 use crate::transport::{Presence, Transport};
 use crate::{Inbox, LinkId, Taken};
 
+/// A link the stand opened: its number, its inbox, where to send frames down it.
+type StandLink = (LinkId, Arc<Inbox>, mpsc::UnboundedSender<Bytes>);
+
 /// Central's part, reduced to the links it opened and the ones that closed.
 #[derive(Default)]
 struct Stand {
     hub: Arc<Recorder>,
-    links: Mutex<Vec<(LinkId, Arc<Inbox>, mpsc::UnboundedSender<Bytes>)>>,
+    links: Mutex<Vec<StandLink>>,
     closed: Mutex<Vec<LinkId>>,
 }
 
