@@ -49,7 +49,7 @@ pub(crate) async fn run(args: PingArgs) -> anyhow::Result<ExitCode> {
                 "zenoh"
             };
             let echo = match &args.target {
-                Some(t) => format!(", echo {t} in its own process"),
+                Some(t) => format!(", echo module {t} in another process"),
                 None => String::new(),
             };
             (report, format!("central at {endpoint} ({link}{echo})"))
