@@ -119,6 +119,13 @@ async fn the_ambler_crosses_the_ditch_on_its_own_map() {
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_hexapod_walks_its_rough_course_on_its_own_map() {
+    let report = walk(options("hexapod", "hexapod-rough", 2)).await;
+    assert_safe_arrival(&report, &course_terrain("hexapod-rough", 2));
+    assert!(!report.mode.contains("true terrain"), "{}", report.mode);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_hexapod_walks_its_rough_course_planning_on_the_true_terrain() {
     let report = walk(LeggedWalkOptions {
         ground_truth: true,

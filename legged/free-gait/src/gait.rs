@@ -28,6 +28,13 @@ const CANDIDATES_TRIED: usize = 1500;
 const SWINGS_TRIED: usize = 12;
 /// Fractions of the full body move tested for each leg's reach.
 const REACH_FRACTIONS: usize = 6;
+/// Bisections of the first sixth of a move, when a leg does not reach its end, for the
+/// fraction it does.
+const REACH_REFINEMENTS: usize = 4;
+/// Steps of body height tried above and below the neutral height over the feet, and their
+/// size as a share of the robot's neutral standing height.
+const HEIGHT_STEPS: usize = 5;
+const HEIGHT_STEP: f64 = 0.1;
 
 /// Body poses along a move and the posture at each.
 type Samples = Vec<(Isometry3<f64>, Vec<Vec<f64>>)>;
@@ -46,10 +53,10 @@ struct LegInfo {
     neutral: Point3<f64>,
     /// Candidate foot positions in the body frame.
     candidates: Vec<Candidate>,
-    /// The candidate of each workspace cell.
-    cells: HashMap<(i64, i64), usize>,
     /// Lowest and highest foot-sphere centre in the body frame.
     z_range: (f64, f64),
+    /// The candidate of each workspace cell.
+    cells: HashMap<(i64, i64), usize>,
 }
 
 /// A candidate foot position: (x, y) in the body frame and the heights (body frame) the
@@ -108,13 +115,11 @@ pub struct FreeGait {
 
 impl LegInfo {
     /// The body-frame heights the foot reaches over (x, y), from the workspace samples of
-    /// that cell; the whole sampled range when the cell has none.
-    fn z_at(&self, x: f64, y: f64, cell: f64) -> (f64, f64) {
+    /// that cell; `None` when the cell has none (the foot is out of reach there at any
+    /// height).
+    fn z_at(&self, x: f64, y: f64, cell: f64) -> Option<(f64, f64)> {
         let key = ((x / cell).round() as i64, (y / cell).round() as i64);
-        self.cells
-            .get(&key)
-            .map(|&k| self.candidates[k].z_range)
-            .unwrap_or(self.z_range)
+        self.cells.get(&key).map(|&k| self.candidates[k].z_range)
     }
 }
 
@@ -190,8 +195,8 @@ impl FreeGait {
                     slide,
                     neutral,
                     candidates,
-                    cells: index,
                     z_range: (lo, hi),
+                    cells: index,
                 }
             })
             .collect();
@@ -421,9 +426,16 @@ impl FreeGait {
         })
     }
 
-    /// The level body's height at (x, y): within the heights at which every standing foot
-    /// stays in its leg's sampled workspace, at `height_bias` of the way from the lowest to
-    /// the highest; at the neutral height over the feet when they allow no height at all.
+    /// The level body's height at (x, y), from the heights (body-frame) at which each
+    /// standing foot stays in its leg's sampled workspace there.
+    ///
+    /// With a `height_bias`, the body stands that far from the lowest to the highest
+    /// height every foot allows (a foot out of reach at (x, y) allowing its whole
+    /// workspace's heights; the neutral height over the feet when they allow none). Without one (legs of revolute joints, whose sampled heights at an (x, y)
+    /// are too thin a band to intersect), it stands at the neutral height over the feet
+    /// or the nearest height at which every foot can be reached, and at the neutral height
+    /// when no height reaches them all: one foot at the edge of its workspace does not drag
+    /// the body up or down; it is swung first.
     fn body_height(
         &self,
         state: &GaitState,
@@ -432,24 +444,72 @@ impl FreeGait {
         y: f64,
         rotation: &UnitQuaternion<f64>,
     ) -> f64 {
-        let (mut low, mut high) = (f64::NEG_INFINITY, f64::INFINITY);
+        let mut ranges = Vec::with_capacity(stance.len());
         let mut mean = 0.0;
         for &i in stance {
             let info = &self.legs[i];
             let centre = centre_of_contact(&state.legs[i].foot, info.radius);
             mean += centre.z - info.neutral.z;
             let local = rotation.inverse() * Vector3::new(centre.x - x, centre.y - y, 0.0);
-            let range = info.z_at(local.x, local.y, self.params.foothold_spacing_m);
-            // local z = centre.z - body z must lie in the range.
-            low = low.max(centre.z - range.1);
-            high = high.min(centre.z - range.0);
+            // local z = centre.z - body z must lie in the range; with a bias, a foot out
+            // of reach at (x, y) bounds the height by its whole workspace.
+            let range = info
+                .z_at(local.x, local.y, self.params.foothold_spacing_m)
+                .or(self.params.height_bias.map(|_| info.z_range));
+            if let Some(range) = range {
+                ranges.push((centre.z - range.1, centre.z - range.0));
+            }
         }
         mean /= stance.len().max(1) as f64;
-        if low <= high {
-            low + self.params.height_bias * (high - low)
-        } else {
-            mean
+        match self.params.height_bias {
+            Some(bias) => {
+                let low = ranges.iter().map(|r| r.0).fold(f64::NEG_INFINITY, f64::max);
+                let high = ranges.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
+                if low <= high && low.is_finite() && high.is_finite() {
+                    low + bias * (high - low)
+                } else {
+                    mean
+                }
+            }
+            None => self.most_reached_height(state, stance, x, y, rotation, mean),
         }
+    }
+
+    /// The body height nearest the neutral height over the feet, among it and heights
+    /// stepped above and below it, at which every standing foot can be reached (inverse
+    /// kinematics from the present posture); the neutral height when none is.
+    fn most_reached_height(
+        &self,
+        state: &GaitState,
+        stance: &[usize],
+        x: f64,
+        y: f64,
+        rotation: &UnitQuaternion<f64>,
+        neutral: f64,
+    ) -> f64 {
+        let step = HEIGHT_STEP * self.model.neutral_height().max(1e-3);
+        let reached = |z: f64| {
+            let inverse = Isometry3::from_parts(Translation3::new(x, y, z), *rotation).inverse();
+            stance
+                .iter()
+                .filter(|&&i| {
+                    let centre = centre_of_contact(&state.legs[i].foot, self.legs[i].radius);
+                    self.ik(i, &(inverse * centre), &state.legs[i].joints, 0)
+                        .is_some()
+                })
+                .count()
+        };
+        if reached(neutral) == stance.len() {
+            return neutral;
+        }
+        for k in 1..=HEIGHT_STEPS {
+            for z in [neutral - k as f64 * step, neutral + k as f64 * step] {
+                if reached(z) == stance.len() {
+                    return z;
+                }
+            }
+        }
+        neutral
     }
 
     /// A walking step: choose the leg, the body move, the foothold and the swing.
@@ -494,9 +554,34 @@ impl FreeGait {
                     None => break,
                 }
             }
+            // When not even the first sixth is reached, the furthest fraction of it that
+            // is, backed off by a bisection step so as not to end at the edge of the
+            // workspace: near the goal or an obstacle a short move may be all there is.
+            if last == 0.0 {
+                let (mut lo, mut hi) = (last, last + 1.0 / REACH_FRACTIONS as f64);
+                for _ in 0..REACH_REFINEMENTS {
+                    let mid = 0.5 * (lo + hi);
+                    let pose = state.body.lerp_slerp(&full, mid);
+                    match self.ik(i, &(pose.inverse() * centre), &q, 0) {
+                        Some(joints) => {
+                            q = joints;
+                            lo = mid;
+                        }
+                        None => hi = mid,
+                    }
+                }
+                last = (lo - (hi - lo)).max(0.0);
+            }
             reach[i] = last;
         }
         let f_max = stance.iter().map(|&i| reach[i]).fold(1.0, f64::min);
+        tracing::debug!(
+            z_now = state.body.translation.z,
+            z_target = z,
+            advance,
+            reach = ?stance.iter().map(|&i| (self.legs[i].name.as_str(), reach[i])).collect::<Vec<_>>(),
+            "reach along the full body move"
+        );
         let behind = |i: usize| {
             let neutral = state.body * self.legs[i].neutral;
             let foot = state.legs[i].foot;
@@ -576,6 +661,16 @@ impl FreeGait {
                     let body_progress = here_progress(&body.target);
                     match self.step_leg(state, terrain, &body, leg, direction, body_progress) {
                         Ok((swing, foothold)) => {
+                            if f < 1.0 {
+                                tracing::debug!(
+                                    leg = %self.legs[leg].name,
+                                    fraction = f,
+                                    f_max,
+                                    why = %why.join("; "),
+                                    earlier_legs = %reasons.join(" | "),
+                                    "step with less than the full body move"
+                                );
+                            }
                             return Ok(self.assemble(state, &body, leg, swing, foothold));
                         }
                         Err(e) => why.push(e),
@@ -687,7 +782,6 @@ impl FreeGait {
                     &start,
                     &foothold,
                     &polygon,
-                    true,
                 ) {
                     Ok(swing) => return Ok((swing, foothold)),
                     Err(e) => why.push(e),
@@ -733,9 +827,13 @@ impl FreeGait {
             .map(|c| (c.at - n).dot(&d))
             .fold(0.0f64, f64::max);
         let target = 0.8 * ahead;
+        // A foot keeps to its own side of the body: no nearer the body's centre line than
+        // half its neutral distance from it, so that legs never fold under the body.
+        let inboard = 0.5 * n.y.abs();
         let mut ranked: Vec<(f64, &Candidate)> = info
             .candidates
             .iter()
+            .filter(|c| c.at.y * n.y.signum() >= inboard)
             .map(|c| {
                 let rel = c.at - n;
                 let along = rel.dot(&d);
@@ -933,7 +1031,6 @@ impl FreeGait {
         start: &[f64],
         foothold: &Foothold,
         polygon: &Polygon,
-        on_ground: bool,
     ) -> Result<Swing, String> {
         let p = &self.params;
         let info = &self.legs[leg];
@@ -998,11 +1095,10 @@ impl FreeGait {
                 break;
             };
             let mut com_path = Vec::new();
-            let first = if on_ground {
-                Segment::Lift
-            } else {
-                Segment::Travel
-            };
+            // The first segment leaves where the foot is, on the ground or in the air: that
+            // place is free whatever the map says (a foot stopped in the air below the
+            // mapped ground found the map too high there), so it is judged as a lift.
+            let first = Segment::Lift;
             let result = self
                 .segment(
                     terrain,
@@ -1236,7 +1332,6 @@ impl FreeGait {
                 &posture[leg],
                 &foothold,
                 &polygon,
-                false,
             ) {
                 Ok(swing) => return Ok(self.assemble(state, &body, leg, swing, foothold)),
                 Err(e) => why.push(e),

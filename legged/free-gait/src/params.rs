@@ -36,8 +36,11 @@ pub struct GaitParams {
     pub min_progress_m: f64,
     /// Where the level body stands between the lowest and the highest height every
     /// standing foot allows (0 lowest, 1 highest): high leaves room to lift feet over
-    /// obstacles and up slopes.
-    pub height_bias: f64,
+    /// obstacles and up slopes. `None`: at the neutral height over the standing feet,
+    /// brought within that range (for legs of revolute joints, whose workspace reaches
+    /// above the body as well as below it, the middle of the range can be a body on the
+    /// ground).
+    pub height_bias: Option<f64>,
     /// Length scale of the robot: 1 for the Ambler, about 0.1 for the hexapod.
     pub scale: f64,
 }
@@ -102,7 +105,7 @@ impl GaitParams {
             goal_tolerance_m: 0.3 * s,
             unknown_rise_m: (clearance_under_body * 0.5).max(0.0),
             min_progress_m: 0.02 * s,
-            height_bias: if lifts_vertically { 0.8 } else { 0.5 },
+            height_bias: lifts_vertically.then_some(0.8),
             scale: s,
         }
     }

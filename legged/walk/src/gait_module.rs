@@ -68,12 +68,15 @@ pub struct GaitModuleConfig {
 pub const MAP_HEIGHT_ERROR_M: f64 = 0.005;
 
 impl GaitModuleConfig {
-    /// The free gait's clearance of the ground and the depth a swing reaches below its
-    /// foothold widened to at least twice [`MAP_HEIGHT_ERROR_M`], so that a small robot
-    /// planning on a perceived map neither brushes the ground nor stops short of it.
+    /// The free gait's clearance of the ground widened to at least three times
+    /// [`MAP_HEIGHT_ERROR_M`] and the depth a swing reaches below its foothold to at least
+    /// twice it, so that a small robot planning on a perceived map neither brushes the
+    /// ground nor stops short of it. The clearance takes the larger allowance because the
+    /// error is largest where a swing passes: a pebble's peak narrower than two cells is
+    /// seen lower than it stands.
     pub fn with_map_allowance(mut self) -> Self {
         let p = &mut self.params;
-        p.clearance_m = p.clearance_m.max(2.0 * MAP_HEIGHT_ERROR_M);
+        p.clearance_m = p.clearance_m.max(3.0 * MAP_HEIGHT_ERROR_M);
         p.below_foothold_m = p.below_foothold_m.max(2.0 * MAP_HEIGHT_ERROR_M);
         self
     }
