@@ -4,9 +4,12 @@
 //! Each [`FreeGait::plan_step`] moves the body toward the goal and re-places one leg:
 //!
 //! 1. **Leg.** Every standing foot is tested for how far along the full body move (a
-//!    translation of up to `max_body_step_m` toward the goal, a turn toward it, the body at
-//!    its neutral height over the feet) it stays within reach; the legs that run out first,
-//!    then those farthest behind, are tried first.
+//!    translation of up to `max_body_step_m` toward the goal, a turn toward it) it stays
+//!    within reach; the legs that run out first, then those farthest behind, are tried
+//!    first. The body's height at the end of the move: for legs with a vertical slide,
+//!    `height_bias` of the way up the heights every foot's sampled workspace allows; for
+//!    legs of revolute joints, the neutral height over the feet, or the nearest height a
+//!    few steps above or below it at which inverse kinematics reaches every foot.
 //! 2. **Body move.** The largest fraction of the move every standing leg can follow, or
 //!    less; each is checked every `sample_m` for inverse kinematics of every standing leg,
 //!    the stability margin over the standing feet (`tca_stability::margin_along_path` on
@@ -14,9 +17,10 @@
 //!    the terrain. If lifting the leg afterwards would leave less than `min_margin_m`, the
 //!    body also shifts toward the middle of the feet that stay.
 //! 3. **Foothold.** Candidates are drawn from the leg's sampled workspace, placed by the
-//!    body's new pose, and ranked by progress toward the goal, the terrain's
-//!    [`TerrainView::foothold_cost`] and the margin of the stance they give. Unknown ground
-//!    is never stepped on.
+//!    body's new pose, kept to the leg's own side of the body (no nearer its centre line
+//!    than half the neutral foot's distance from it), and ranked by progress toward the
+//!    goal, the terrain's [`TerrainView::foothold_cost`] and the margin of the stance they
+//!    give. Unknown ground is never stepped on.
 //! 4. **Swing.** Lift, travel above the terrain with `clearance_m`, lower to a way-point
 //!    `below_foothold_m` under the foothold so that the executor's transition move stops at
 //!    contact. A leg with a vertical prismatic joint (the Ambler's kind) lifts and lowers
