@@ -12,12 +12,12 @@ use std::time::Duration;
 
 use bytes::Bytes;
 use futures::future::BoxFuture;
-use tokio::io::{AsyncWriteExt, BufReader, BufWriter};
+use tokio::io::{AsyncWriteExt, BufWriter};
 use tokio::net::UnixStream;
 use tokio::sync::{mpsc, oneshot};
 
 use crate::local::endpoint::{LocalEndpoint, check_private_dir};
-use crate::local::frame::{read_frame, read_greeting, write_frame};
+use crate::local::frame::{FrameReader, read_greeting, write_frame};
 use crate::outbox::FrameReceiver;
 use crate::transport::{FrameSender, Link, Presence, SendFrame, Transport};
 use crate::zenoh::{RETRY_PERIOD_INIT_MS, RETRY_PERIOD_MAX_MS};
@@ -176,13 +176,13 @@ impl Carrier {
     /// Carries frames both ways on one connection until it ends or the module stops.
     async fn carry(&mut self, stream: UnixStream) -> End {
         let (r, w) = stream.into_split();
-        let mut r = BufReader::with_capacity(WRITE_BUFFER, r);
+        let mut r = FrameReader::new(r, MAX_FRAME_FROM_CENTRAL);
         let mut w = BufWriter::with_capacity(WRITE_BUFFER, w);
         let down = &self.down;
         let up = &mut self.up;
         let reader = async {
             loop {
-                match read_frame(&mut r, MAX_FRAME_FROM_CENTRAL).await {
+                match r.next().await {
                     Ok(Some(frame)) => {
                         if down.send(frame).is_err() {
                             return End::Stop;

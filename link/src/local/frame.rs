@@ -4,7 +4,7 @@
 //! Central's greeting is [`MAGIC`] and one status byte: [`ADMITTED`], or [`REFUSED`] followed
 //! by a length-prefixed UTF-8 reason, after which central closes the socket.
 
-use bytes::{Bytes, BytesMut};
+use bytes::{Buf, Bytes, BytesMut};
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 
 /// The first bytes central writes on a local link (protocol version 1).
@@ -48,6 +48,66 @@ pub async fn read_frame<R: AsyncRead + Unpin>(
     let mut buf = BytesMut::zeroed(len);
     r.read_exact(&mut buf).await?;
     Ok(Some(buf.freeze()))
+}
+
+/// Bytes asked of the socket at once, at least.
+const READ_CHUNK: usize = 64 << 10;
+
+/// Reads frames from a stream into one growing buffer and hands each out as a slice of it
+/// (no copy per frame, as tokio-util's framed readers do).
+#[derive(Debug)]
+pub struct FrameReader<R> {
+    inner: R,
+    buf: BytesMut,
+    max: usize,
+}
+
+impl<R: AsyncRead + Unpin> FrameReader<R> {
+    /// Reads frames of at most `max` bytes from `inner`.
+    pub fn new(inner: R, max: usize) -> Self {
+        FrameReader {
+            inner,
+            buf: BytesMut::with_capacity(READ_CHUNK),
+            max,
+        }
+    }
+
+    /// The next frame; `None` at a clean end of stream (between frames). A frame longer than
+    /// the limit, or a stream ending inside a frame, is an error.
+    pub async fn next(&mut self) -> std::io::Result<Option<Bytes>> {
+        loop {
+            let mut need = 4;
+            if self.buf.len() >= 4 {
+                let len = u32::from_le_bytes([self.buf[0], self.buf[1], self.buf[2], self.buf[3]])
+                    as usize;
+                if len > self.max {
+                    return Err(std::io::Error::new(
+                        std::io::ErrorKind::InvalidData,
+                        format!("frame of {len} bytes is over the limit of {}", self.max),
+                    ));
+                }
+                if self.buf.len() >= 4 + len {
+                    self.buf.advance(4);
+                    return Ok(Some(self.buf.split_to(len).freeze()));
+                }
+                need = 4 + len;
+            }
+            let want = (need - self.buf.len()).max(READ_CHUNK / 4);
+            if self.buf.capacity() - self.buf.len() < want {
+                self.buf.reserve(want.max(READ_CHUNK));
+            }
+            if self.inner.read_buf(&mut self.buf).await? == 0 {
+                return if self.buf.is_empty() {
+                    Ok(None)
+                } else {
+                    Err(std::io::Error::new(
+                        std::io::ErrorKind::UnexpectedEof,
+                        "the stream ended inside a frame",
+                    ))
+                };
+            }
+        }
+    }
 }
 
 /// Writes central's greeting: admitted, or refused with `reason`.
@@ -110,6 +170,32 @@ mod tests {
         let (a, mut b) = tokio::io::duplex(16);
         drop(a);
         assert!(read_frame(&mut b, 64).await.unwrap().is_none());
+    }
+
+    #[tokio::test]
+    async fn a_frame_reader_slices_frames_across_reads() {
+        let (mut a, b) = tokio::io::duplex(7);
+        let mut reader = FrameReader::new(b, 64);
+        let writer = tokio::spawn(async move {
+            write_frame(&mut a, b"hello").await.unwrap();
+            write_frame(&mut a, b"").await.unwrap();
+            write_frame(&mut a, &[9u8; 40]).await.unwrap();
+            write_frame(&mut a, &[1u8; 65]).await.unwrap();
+        });
+        assert_eq!(reader.next().await.unwrap().unwrap(), &b"hello"[..]);
+        assert_eq!(reader.next().await.unwrap().unwrap(), &b""[..]);
+        assert_eq!(reader.next().await.unwrap().unwrap(), &[9u8; 40][..]);
+        let err = reader.next().await.unwrap_err();
+        assert!(err.to_string().contains("over the limit"), "{err}");
+        writer.abort();
+        let (mut a, b) = tokio::io::duplex(64);
+        a.write_all(&[3, 0, 0, 0, 1]).await.unwrap();
+        drop(a);
+        let mut reader = FrameReader::new(b, 64);
+        assert!(reader.next().await.is_err(), "ended inside a frame");
+        let (a, b) = tokio::io::duplex(64);
+        drop(a);
+        assert!(FrameReader::new(b, 64).next().await.unwrap().is_none());
     }
 
     #[tokio::test]

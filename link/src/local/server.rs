@@ -14,14 +14,14 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use bytes::Bytes;
-use tokio::io::{AsyncWriteExt, BufReader, BufWriter};
+use tokio::io::{AsyncWriteExt, BufWriter};
 use tokio::net::{UnixListener, UnixStream};
 use tokio::sync::{oneshot, watch};
 use tokio::task::JoinHandle;
 
 use crate::inbox::Inbox;
 use crate::local::endpoint::LocalEndpoint;
-use crate::local::frame::{read_frame, write_frame, write_greeting};
+use crate::local::frame::{FrameReader, write_frame, write_greeting};
 use crate::local::peer::PeerPolicy;
 use crate::outbox::FrameReceiver;
 use crate::{LinkError, LinkId, Result};
@@ -166,7 +166,7 @@ async fn serve(
     };
     let (reader, writer) = stream.into_split();
     // Buffered both ways: a burst of frames costs a few system calls, not two per frame.
-    let mut reader = BufReader::with_capacity(WRITE_BUFFER, reader);
+    let mut reader = FrameReader::new(reader, max_frame_bytes);
     let mut writer = BufWriter::with_capacity(WRITE_BUFFER, writer);
     if let Some(reason) = refusal {
         tracing::warn!(%reason, "refused a local connection");
@@ -182,7 +182,7 @@ async fn serve(
     let (reader_done, reader_ended) = oneshot::channel();
     tokio::spawn(write_frames(link, writer, rx, stopped, reader_ended));
     loop {
-        match read_frame(&mut reader, max_frame_bytes).await {
+        match reader.next().await {
             Ok(Some(frame)) => inbox.push_or_refuse(frame),
             Ok(None) => break,
             Err(e) => {
