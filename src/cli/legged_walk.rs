@@ -167,6 +167,42 @@ fn options_of(args: &WalkArgs) -> anyhow::Result<LeggedWalkOptions> {
         seed: args.seed,
         ground_truth: args.ground_truth,
         out: Some(args.out.clone().unwrap_or_else(|| default_out(args))),
+        connect: args.connect.clone(),
+    })
+}
+
+/// The walk a legged module (`tca module legged-NAME`) serves: the robot, the terrain (a
+/// course or a file), the start and the seed it shares with the walker and the other
+/// modules.
+pub(crate) fn module_options(
+    robot: &str,
+    course: Option<&str>,
+    terrain: Option<&std::path::Path>,
+    start: Option<&str>,
+    seed: u64,
+    ground_truth: bool,
+) -> anyhow::Result<LeggedWalkOptions> {
+    let terrain = match (course, terrain) {
+        (_, Some(path)) => Some(LeggedTerrain::File(path.to_path_buf())),
+        (Some(name), None) => Some(LeggedTerrain::Course {
+            name: name.to_owned(),
+            seed,
+        }),
+        (None, None) => None,
+    };
+    let start = match start {
+        Some(text) => {
+            let v = parse_place("start", text, true)?;
+            Some([v[0], v[1], v.get(2).copied().unwrap_or(0.0)])
+        }
+        None => None,
+    };
+    Ok(LeggedWalkOptions {
+        terrain,
+        start,
+        seed,
+        ground_truth,
+        ..LeggedWalkOptions::new(robot)
     })
 }
 

@@ -8,19 +8,47 @@ use tca_module::Connector;
 
 use super::ConnectArgs;
 
-/// Names of the built-in modules: the echo of `tca ping` and the six walking modules.
-pub(crate) const BUILTIN_MODULES: &[&str] =
-    &["echo", "controller", "ism", "ltm", "pdm", "lrp", "gait"];
+/// Names of the built-in modules: the echo of `tca ping`, the six walking modules of the
+/// single leg and the four of a multi-legged robot.
+pub(crate) const BUILTIN_MODULES: &[&str] = &[
+    "echo",
+    "controller",
+    "ism",
+    "ltm",
+    "pdm",
+    "lrp",
+    "gait",
+    "legged-controller",
+    "legged-ism",
+    "legged-ltm",
+    "legged-gait",
+];
 
 #[derive(Debug, Args)]
 pub(crate) struct ModuleArgs {
-    /// The built-in module to run: echo, controller, ism, ltm, pdm, lrp or gait.
+    /// The built-in module to run: echo; the single leg's controller, ism, ltm, pdm, lrp or
+    /// gait; a multi-legged robot's legged-controller, legged-ism, legged-ltm or
+    /// legged-gait (with --robot).
     name: String,
     #[command(flatten)]
     connect: ConnectArgs,
-    /// The terrain of the walking modules: course 1, 2, 3, 4 or random (from --seed).
-    #[arg(long, default_value = "3", conflicts_with = "terrain")]
-    course: String,
+    /// The terrain of the walking modules: for the single leg course 1, 2, 3 (the default),
+    /// 4 or random (from --seed); for the legged modules one of `tca course list` (default:
+    /// the robot's own scale's rough ground).
+    #[arg(long, conflicts_with = "terrain")]
+    course: Option<String>,
+    /// The robot of the legged modules: a shipped one (ambler, hexapod, athlete) or a URDF
+    /// file. Give every legged module, and `tca walk --robot ... --connect`, the same robot,
+    /// course or terrain, start and seed.
+    #[arg(long, value_name = "NAME|FILE.urdf")]
+    robot: Option<String>,
+    /// Where the legged robot's body starts, X,Y[,YAW] in world metres and radians (default:
+    /// the course's start, or near a terrain file's west edge).
+    #[arg(long, value_name = "X,Y[,YAW]", allow_negative_numbers = true)]
+    start: Option<String>,
+    /// legged-gait plans on the true terrain instead of the LTM Manager's maps.
+    #[arg(long)]
+    ground_truth: bool,
     /// The terrain from an ESRI ASCII grid (.asc) file instead.
     #[arg(long, value_name = "FILE.asc")]
     terrain: Option<std::path::PathBuf>,
@@ -65,8 +93,34 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
         .or_else(|| std::env::var("TCA_CONNECT").ok())
         .unwrap_or_else(|| args.connect.endpoint_or_default());
     let connector = Connector::endpoint(endpoint.clone());
-    let terrain =
-        tca_walk::TerrainChoice::from_args(&args.course, args.terrain.as_deref(), args.seed)?;
+    if let Some(inner) = args.name.strip_prefix("legged-") {
+        let Some(robot) = &args.robot else {
+            anyhow::bail!(
+                "module {} is a multi-legged robot's: give its robot with --robot NAME|FILE.urdf",
+                args.name
+            );
+        };
+        let options = super::legged_walk::module_options(
+            robot,
+            args.course.as_deref(),
+            args.terrain.as_deref(),
+            args.start.as_deref(),
+            args.seed,
+            args.ground_truth,
+        )?;
+        let module = tca_legged_walk::walk::connect_module_for(inner, &connector, &options)
+            .await
+            .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
+        return serve(module, &args.name, &endpoint).await;
+    }
+    if args.robot.is_some() || args.start.is_some() || args.ground_truth {
+        anyhow::bail!(
+            "--robot, --start and --ground-truth are for the legged modules (legged-controller, legged-ism, legged-ltm, legged-gait), not {}",
+            args.name
+        );
+    }
+    let course = args.course.as_deref().unwrap_or("3");
+    let terrain = tca_walk::TerrainChoice::from_args(course, args.terrain.as_deref(), args.seed)?;
     let options = tca_walk::ModuleOptions {
         terrain,
         seed: args.seed,
@@ -93,11 +147,16 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
         );
     }
     .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
-    eprintln!("module {} connected to central at {endpoint}", args.name);
+    serve(module, &args.name, &endpoint).await
+}
+
+/// Runs a connected module until Ctrl-C or until central closes its link.
+async fn serve(module: tca_module::Module, name: &str, endpoint: &str) -> anyhow::Result<ExitCode> {
+    eprintln!("module {name} connected to central at {endpoint}");
     tokio::select! {
         r = tokio::signal::ctrl_c() => { r.context("cannot wait for Ctrl-C")?; }
         _ = module.closed() => {
-            anyhow::bail!("central closed the link to module {}", args.name);
+            anyhow::bail!("central closed the link to module {name}");
         }
     }
     module.close().await;

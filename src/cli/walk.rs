@@ -51,7 +51,12 @@ pub(crate) struct WalkArgs {
     /// With --robot: walk once per seed in FIRST..LAST (e.g. 1..5), each in DIR/seed-N, and
     /// print one line per walk and a tally (exit status 0 only when every walk reached its
     /// goal with no fall and no collision).
-    #[arg(long, value_name = "FIRST..LAST", requires = "robot")]
+    #[arg(
+        long,
+        value_name = "FIRST..LAST",
+        requires = "robot",
+        conflicts_with = "connect"
+    )]
     pub(crate) seeds: Option<String>,
     /// Then walk back to the start, using the maps made walking forward.
     #[arg(long, conflicts_with = "robot")]
@@ -69,10 +74,12 @@ pub(crate) struct WalkArgs {
     /// Also write every step's cost maps and leg search as pictures (in DIR/steps).
     #[arg(long, conflicts_with = "robot")]
     pictures: bool,
-    /// Walk with the modules already running behind central at this zenoh endpoint
-    /// (`tca up walk.toml`); the log and pictures are then central's and the modules'.
-    #[arg(long, value_name = "ENDPOINT", conflicts_with = "robot")]
-    connect: Option<String>,
+    /// Walk with the modules already running behind central at this endpoint (`tca up
+    /// walk.toml`, or with --robot `tca up walk-legged.toml`: each module started with the
+    /// same robot, course or terrain, start and seed as this walk); the log is then
+    /// central's.
+    #[arg(long, value_name = "ENDPOINT")]
+    pub(crate) connect: Option<String>,
     /// What the planners' computing costs in simulated time: "paper" (the 1990 system's
     /// times, §7.2: Gait Planner 2 s, Leg Recovery Planner 12 s a step) or "measured" (this
     /// machine's milliseconds).

@@ -51,6 +51,10 @@ pub struct LeggedWalkOptions {
     /// Where to write the log (`traffic.mcap`), the map picture (`map.png`) and the report
     /// (`report.json`).
     pub out: Option<PathBuf>,
+    /// Walk with the modules already running behind central at this endpoint (each its own
+    /// process, `tca module legged-NAME`, started with the same robot, terrain, start and
+    /// seed) instead of starting central and the modules here; the log is then central's.
+    pub connect: Option<String>,
 }
 
 impl LeggedWalkOptions {
@@ -66,6 +70,7 @@ impl LeggedWalkOptions {
             seed: 1,
             ground_truth: false,
             out: None,
+            connect: None,
         }
     }
 }
@@ -101,13 +106,25 @@ struct Collected {
     steps: Vec<StepPlanned>,
 }
 
-/// Walks, reporting progress through `progress`. Bad robots, terrains, starts and goals are
-/// refused before anything starts; a walk that cannot go on ends with the reason.
-pub async fn walk(
-    options: &LeggedWalkOptions,
-    progress: mpsc::UnboundedSender<Progress>,
-) -> anyhow::Result<LeggedWalkReport> {
-    let started = Instant::now();
+/// A walk's robot, terrain, start and goal, loaded and checked: what the walker and each of
+/// the modules it walks with must agree on.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    /// The modules' shared settings.
+    pub setup: LeggedSetup,
+    /// Where the body starts `[x, y, yaw]`.
+    pub start: [f64; 3],
+    /// The goal `[x, y]`.
+    pub goal: [f64; 2],
+    /// How near the goal the body must come, metres.
+    pub tolerance_m: f64,
+    /// The terrain, for people.
+    pub terrain: String,
+}
+
+/// Loads the robot and the terrain of a walk and settles its start and goal; bad robots,
+/// terrains, starts and goals are refused, saying what to change.
+pub fn prepare(options: &LeggedWalkOptions) -> anyhow::Result<Prepared> {
     let (model, urdf) = load_robot(&options.robot)?;
     let model = Arc::new(model);
     let params = GaitParams::for_model(&model);
@@ -160,10 +177,48 @@ pub async fn walk(
         seed: options.seed,
         ground_truth: options.ground_truth,
     };
+    Ok(Prepared {
+        setup,
+        start,
+        goal,
+        tolerance_m,
+        terrain: loaded.describe,
+    })
+}
+
+/// Connects one legged walking module (`controller`, `ism`, `ltm` or `gait`) for the walk
+/// `options` describe, to run as its own process beside the walker of `tca walk --connect`.
+pub async fn connect_module_for(
+    name: &str,
+    connector: &Connector,
+    options: &LeggedWalkOptions,
+) -> anyhow::Result<Module> {
+    let prepared = prepare(options)?;
+    crate::system::connect_module(name, connector, &prepared.setup)
+        .await
+        .map_err(|e| anyhow::anyhow!("cannot start the legged module {name}: {e}"))
+}
+
+/// Walks, reporting progress through `progress`. Bad robots, terrains, starts and goals are
+/// refused before anything starts; a walk that cannot go on ends with the reason.
+pub async fn walk(
+    options: &LeggedWalkOptions,
+    progress: mpsc::UnboundedSender<Progress>,
+) -> anyhow::Result<LeggedWalkReport> {
+    let started = Instant::now();
+    let Prepared {
+        setup,
+        start,
+        goal,
+        tolerance_m,
+        terrain: terrain_described,
+    } = prepare(options)?;
+    let model = setup.model.clone();
+    let field = setup.terrain.clone();
     let describe = format!(
         "{} on {}, from ({:.2}, {:.2}) to ({:.2}, {:.2})",
         model.name(),
-        loaded.describe,
+        terrain_described,
         start[0],
         start[1],
         goal[0],
@@ -176,14 +231,27 @@ pub async fn walk(
     if let Some(dir) = &options.out {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
-    let log_path = options.out.as_ref().map(|d| d.join("traffic.mcap"));
-    let central = tca_central::start(StartOptions::simulated(log_path.clone()))
-        .await
-        .context("cannot start central")?;
-    let connector = Connector::from(central.in_process());
-    let modules = connect_all(&connector, &setup)
-        .await
-        .map_err(|e| anyhow::anyhow!("cannot start the legged walking modules: {e}"))?;
+    // Here: central (logging to DIR) and the modules in this process. Connected: the
+    // walker alone, beside modules that run behind central elsewhere.
+    let (central, connector, modules, log_path) = match &options.connect {
+        None => {
+            let log_path = options.out.as_ref().map(|d| d.join("traffic.mcap"));
+            let central = tca_central::start(StartOptions::simulated(log_path.clone()))
+                .await
+                .context("cannot start central")?;
+            let connector = Connector::from(central.in_process());
+            let modules = connect_all(&connector, &setup)
+                .await
+                .map_err(|e| anyhow::anyhow!("cannot start the legged walking modules: {e}"))?;
+            (Some(central), connector, modules, log_path)
+        }
+        Some(endpoint) => (
+            None,
+            Connector::endpoint(endpoint.clone()),
+            Vec::new(),
+            None,
+        ),
+    };
 
     let collected = Arc::new(Mutex::new(Collected::default()));
     let (c1, c2) = (collected.clone(), collected.clone());
@@ -205,7 +273,7 @@ pub async fn walk(
         })
         .connect(&connector)
         .await
-        .context("the walker cannot join central")?;
+        .with_context(|| format!("the walker cannot join central ({})", connector.describe()))?;
 
     let task = walker.send_watched(
         &LeggedWalk {
@@ -257,7 +325,7 @@ pub async fn walk(
         planning_ms_per_step,
         states,
         robot: model.name().to_string(),
-        terrain: loaded.describe,
+        terrain: terrain_described,
         mode: format!(
             "{}{}",
             if options.concurrent {
@@ -293,10 +361,12 @@ pub async fn walk(
     for m in modules {
         m.close().await;
     }
-    central
-        .shutdown()
-        .await
-        .context("central did not shut down cleanly")?;
+    if let Some(central) = central {
+        central
+            .shutdown()
+            .await
+            .context("central did not shut down cleanly")?;
+    }
     report.wall_time_s = started.elapsed().as_secs_f64();
     if let Some(dir) = &options.out {
         if let Some(log) = log_path {
