@@ -277,6 +277,20 @@ impl SimClock {
             .collect()
     }
 
+    /// Takes the goal or command of message `id` from the queue, if it waits there as it
+    /// arrived (not yet a task).
+    pub(super) fn take_task_frame(&mut self, id: MessageId) -> Option<(LinkId, Envelope)> {
+        let key = self.queue.iter().find_map(|(k, e)| {
+            matches!(e, Deferred::Frame { envelope, .. }
+                if envelope.id == id && envelope.class.is_task())
+            .then_some(*k)
+        })?;
+        match self.queue.remove(&key) {
+            Some(Deferred::Frame { link, envelope, .. }) => Some((link, envelope)),
+            _ => None,
+        }
+    }
+
     /// Forgets the queued checks of a monitor on `node`.
     pub(super) fn drop_polls(&mut self, node: u64) {
         self.queue

@@ -115,6 +115,14 @@ impl Central {
         out: &mut Vec<Action>,
     ) -> Result<(), String> {
         let Some(node) = self.tasks.get(&task).map(|t| t.node) else {
+            // On the simulated clock it may still wait in the queue, not yet a task.
+            if self.clock.on
+                && let Some((link, envelope)) = self.clock.take_task_frame(task)
+            {
+                let reason = format!("{} {task} was killed before it started", envelope.class);
+                self.send_error(link, &envelope, RouteError::Refused { reason }, out);
+                return Ok(());
+            }
             return Err(format!(
                 "no live task was created by message {task} (it has ended, or was not a goal \
                  or command); `tca tree` shows the live nodes"
