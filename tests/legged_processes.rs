@@ -11,11 +11,6 @@ use common::*;
 
 const WALK_LIMIT: Duration = Duration::from_secs(300);
 
-fn report_of(what: &str, stdout: &str, stderr: &str) -> serde_json::Value {
-    let last = stdout.trim().lines().last().unwrap_or_default();
-    serde_json::from_str(last).unwrap_or_else(|e| panic!("{what}: {e}\n{stdout}\n{stderr}"))
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_hexapod_walks_with_every_legged_module_its_own_process() {
     let dir = tempfile::tempdir().expect("a temporary directory");
@@ -44,7 +39,7 @@ async fn the_hexapod_walks_with_every_legged_module_its_own_process() {
     let out_text = out_dir.to_string_lossy().into_owned();
     connected.extend(["--connect", &endpoint, "--out", &out_text]);
     let (status, stdout, stderr) = run_tca("the connected walk", &connected, WALK_LIMIT).await;
-    let across = report_of("the connected walk", &stdout, &stderr);
+    let across = walk_report(&stdout, &stderr);
     assert!(status.success(), "{stdout}\n{stderr}");
     assert_eq!(across["reached"], true, "{across}");
     assert_eq!(across["falls"], 0, "{across}");
@@ -53,15 +48,7 @@ async fn the_hexapod_walks_with_every_legged_module_its_own_process() {
     assert!(across["steps"].as_u64().unwrap_or(0) >= 20, "{across}");
     assert!(out_dir.join("report.json").exists() && out_dir.join("map.png").exists());
 
-    let _ = std::process::Command::new("kill")
-        .args(["-INT", &up.0.id().to_string()])
-        .status();
-    within("tca up stops", async {
-        while up.0.try_wait().ok().flatten().is_none() {
-            tokio::time::sleep(Duration::from_millis(50)).await;
-        }
-    })
-    .await;
+    up.interrupt_and_wait("tca up stops").await;
     // Central's log holds the walk's moves, as the modules exchanged them.
     let log = tca_logs::LogFile::open(&dir.path().join("traffic.mcap")).expect("central's log");
     assert!(log.truncated.is_none());
@@ -74,7 +61,7 @@ async fn the_hexapod_walks_with_every_legged_module_its_own_process() {
     let mut alone: Vec<&str> = walk.to_vec();
     alone.extend(["--out", &in_process_dir]);
     let (status, stdout, stderr) = run_tca("the in-process walk", &alone, WALK_LIMIT).await;
-    let here = report_of("the in-process walk", &stdout, &stderr);
+    let here = walk_report(&stdout, &stderr);
     assert!(status.success(), "{stdout}\n{stderr}");
     assert_eq!(across["steps"], here["steps"]);
     assert_eq!(across["states"], here["states"]);

@@ -5,7 +5,6 @@
 mod common;
 
 use std::process::{Command, Stdio};
-use std::time::Duration;
 
 use common::*;
 
@@ -62,15 +61,7 @@ async fn the_walk_runs_with_every_module_its_own_process() {
     assert_eq!(report["reached"], true, "{report}");
     assert_eq!(report["collisions"], 0, "{report}");
     assert!(report["steps"].as_u64().unwrap() >= 5, "{report}");
-    let _ = Command::new("kill")
-        .args(["-INT", &up.0.id().to_string()])
-        .status();
-    within("tca up stops", async {
-        while up.0.try_wait().ok().flatten().is_none() {
-            tokio::time::sleep(Duration::from_millis(50)).await;
-        }
-    })
-    .await;
+    up.interrupt_and_wait("tca up stops").await;
     // Central's log of the walk is complete and tells the story.
     let log = tca_logs::LogFile::open(&dir.path().join("traffic.mcap")).unwrap();
     assert!(log.truncated.is_none());

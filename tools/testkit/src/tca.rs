@@ -114,6 +114,20 @@ impl ChildProcess {
         let _ = self.0.kill();
         let _ = self.0.wait();
     }
+
+    /// Interrupts it (`SIGINT`, as Ctrl-C) and waits until it has exited; the test fails
+    /// if that takes longer than [`crate::within`] allows.
+    pub async fn interrupt_and_wait(&mut self, what: &str) {
+        let _ = Command::new("kill")
+            .args(["-INT", &self.0.id().to_string()])
+            .status();
+        crate::within(what, async {
+            while self.0.try_wait().ok().flatten().is_none() {
+                tokio::time::sleep(Duration::from_millis(50)).await;
+            }
+        })
+        .await;
+    }
 }
 
 impl Drop for ChildProcess {
