@@ -147,7 +147,7 @@ async fn the_walking_system_is_driven_by_hand() {
     assert!(launch.contains("\"--speed\", \"20\""), "walk.toml changed");
     let file = dir.path().join("walk.toml");
     std::fs::write(&file, launch).unwrap();
-    let mut up = spawn_tca(&["up", file.to_str().unwrap()]);
+    let mut up = Up(spawn_tca(&["up", file.to_str().unwrap()]));
     wait_for_modules(
         &endpoint,
         &["controller", "ism", "ltm", "pdm", "lrp", "gait"],
@@ -351,13 +351,23 @@ async fn the_walking_system_is_driven_by_hand() {
     let (status, out, err) = tca_at(e, &["call", "bodyPosition", "{}"]).await;
     assert!(status.success(), "after the stop: {out}\n{err}");
     // Ctrl-C stops tca up and every module it started.
-    let _ = Command::new("kill")
-        .args(["-INT", &up.0.id().to_string()])
-        .status();
-    within("tca up stops", async {
-        while up.0.try_wait().ok().flatten().is_none() {
-            tokio::time::sleep(Duration::from_millis(50)).await;
+    up.0.interrupt_and_wait("tca up stops").await;
+}
+
+/// `tca up`, stopped with Ctrl-C (which stops its modules too) when the test ends, even by
+/// a failure.
+struct Up(ChildProcess);
+
+impl Drop for Up {
+    fn drop(&mut self) {
+        let _ = Command::new("kill")
+            .args(["-INT", &self.0.0.id().to_string()])
+            .status();
+        for _ in 0..100 {
+            if self.0.0.try_wait().ok().flatten().is_some() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(50));
         }
-    })
-    .await;
+    }
 }
