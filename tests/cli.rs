@@ -220,6 +220,53 @@ fn bad_input_gets_clear_errors() {
     assert!(!stderr(&out).contains("step  1"), "{}", stderr(&out));
 }
 
+/// Central on a zenoh Unix socket and pings through it: neither side warns (zenoh's link
+/// warns about every connecting socket's missing name unless told not to).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_zenoh_unix_socket_central_works_with_no_warnings() {
+    let dir = tempfile::tempdir().unwrap();
+    let endpoint = format!("unixsock-stream/{}", dir.path().join("c.sock").display());
+    let mut central = tca_testkit::ChildProcess(
+        Command::new(env!("CARGO_BIN_EXE_tca"))
+            .args(["central", "--listen", &endpoint])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("tca central starts"),
+    );
+    let ping = retry("a ping through the unix socket", || async {
+        let (status, out, err) = run_tca(
+            "tca ping",
+            &["ping", "--connect", &endpoint, "-n", "100"],
+            Duration::from_secs(60),
+        )
+        .await;
+        if status.success() {
+            Ok((out, err))
+        } else {
+            Err(err)
+        }
+    })
+    .await;
+    assert!(ping.0.contains("100 query round trips"), "{}", ping.0);
+    for bad in ["WARN", "ERROR", "warning"] {
+        assert!(
+            !ping.1.contains(bad),
+            "{bad} in the ping's stderr:\n{}",
+            ping.1
+        );
+    }
+    central.interrupt_and_wait("central stops").await;
+    let mut err = String::new();
+    if let Some(mut e) = central.0.stderr.take() {
+        use std::io::Read as _;
+        let _ = e.read_to_string(&mut err);
+    }
+    for bad in ["WARN", "ERROR", "warning"] {
+        assert!(!err.contains(bad), "{bad} in central's stderr:\n{err}");
+    }
+}
+
 #[test]
 fn a_normal_walk_prints_no_warnings() {
     let dir = tempfile::tempdir().unwrap();

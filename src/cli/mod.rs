@@ -141,7 +141,10 @@ fn init_tracing() {
     use tracing_subscriber::EnvFilter;
     let filter = EnvFilter::try_from_env("TCA_LOG")
         .or_else(|_| EnvFilter::try_from_default_env())
-        .unwrap_or_else(|_| EnvFilter::new("warn"));
+        // zenoh's Unix-socket link warns "Can not create a new UnixSocketStream link bound
+        // to ..." for every connection it makes, because a connecting socket has no name of
+        // its own (as is normal); it then carries on. Its real failures are errors.
+        .unwrap_or_else(|_| EnvFilter::new("warn,zenoh_link_unixsock_stream=error"));
     let _ = tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
