@@ -1,12 +1,13 @@
-//! Load benchmark: 100 modules exchange queries, goals and informs with randomly
-//! chosen other modules through one central, its traffic log on, for 60 s, in-process and then
-//! over zenoh loopback. Prints, for each run, what was sent, handled and answered per class
-//! (and fails if anything was lost), the messages per second, central's queue high-water marks
-//! against their limits, and the process's resident memory while sending and at its peak.
+//! Load benchmark: 100 modules exchange queries, goals and informs with randomly chosen other
+//! modules through one central, its traffic log on, for 60 s, in-process, then over zenoh
+//! loopback, then over the local link (a Unix socket). Prints, for each run, what was sent,
+//! handled and answered per class (and fails if anything was lost), the messages per second,
+//! central's queue high-water marks against their limits, and the process's resident memory
+//! while sending and at its peak.
 //!
 //! Run: `cargo bench --bench load` (figures in BENCHMARKS.md). Settings by environment:
 //! `LOAD_SECONDS` (60), `LOAD_MODULES` (100), `LOAD_WINDOW` (queries and goals in flight per
-//! module, 16), `LOAD_TRANSPORTS` (`inproc,zenoh`), `LOAD_MAX_QUEUED` (central's
+//! module, 16), `LOAD_TRANSPORTS` (`inproc,zenoh,local`), `LOAD_MAX_QUEUED` (central's
 //! `max_queued_messages`, its default unless set).
 
 use std::process::ExitCode;
@@ -49,7 +50,7 @@ fn main() -> anyhow::Result<ExitCode> {
         config,
         ..LoadOptions::default()
     };
-    let transports = setting("LOAD_TRANSPORTS", "inproc,zenoh".to_owned())?;
+    let transports = setting("LOAD_TRANSPORTS", "inproc,zenoh,local".to_owned())?;
     let runtime = tokio::runtime::Builder::new_multi_thread()
         .worker_threads(2)
         .enable_all()
@@ -60,7 +61,10 @@ fn main() -> anyhow::Result<ExitCode> {
         let transport = match word.trim() {
             "inproc" => TransportKind::InProcess,
             "zenoh" => TransportKind::Zenoh,
-            other => anyhow::bail!("LOAD_TRANSPORTS: unknown transport {other:?} (inproc, zenoh)"),
+            "local" => TransportKind::Local,
+            other => {
+                anyhow::bail!("LOAD_TRANSPORTS: unknown transport {other:?} (inproc, zenoh, local)")
+            }
         };
         let options = LoadOptions {
             transport,

@@ -1,4 +1,4 @@
-//! Whole-system tests of the TCA core over both transports: routing, order, errors, format
+//! Whole-system tests of the TCA core over every transport (in-process, zenoh, local link): routing, order, errors, format
 //! checks, modules crashing and coming back, timeouts, and the traffic log.
 
 mod common;
@@ -69,7 +69,7 @@ async fn controller(central: &TestCentral, moves: Arc<Mutex<Vec<f64>>>) -> Modul
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_query_is_routed_and_answered() {
-    for transport in BOTH {
+    for transport in ALL {
         let central = TestCentral::start(transport).await;
         let _ctl = controller(&central, Default::default()).await;
         let gait = within(
@@ -86,7 +86,7 @@ async fn a_query_is_routed_and_answered() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn commands_are_handled_one_at_a_time_in_order() {
-    for transport in BOTH {
+    for transport in ALL {
         let central = TestCentral::start(transport).await;
         let moves = Arc::new(Mutex::new(Vec::new()));
         let _ctl = controller(&central, moves.clone()).await;
@@ -142,7 +142,7 @@ async fn a_goal_handler_s_commands_become_its_children() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn an_unknown_name_gets_an_error_back() {
-    for transport in BOTH {
+    for transport in ALL {
         let central = TestCentral::start(transport).await;
         let _ctl = controller(&central, Default::default()).await;
         let gait = within(
@@ -170,7 +170,7 @@ async fn an_unknown_name_gets_an_error_back() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_registration_with_another_format_is_refused() {
-    for transport in BOTH {
+    for transport in ALL {
         let central = TestCentral::start(transport).await;
         let _ctl = controller(&central, Default::default()).await;
         let err = within(
@@ -216,7 +216,7 @@ async fn a_query_times_out_with_an_error_not_a_hang() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_query_in_flight_fails_at_once_when_its_handler_dies() {
-    for transport in BOTH {
+    for transport in ALL {
         let central = TestCentral::start(transport).await;
         let slow = Module::builder("slow")
             .handle(|_ctx, _q: SlowQuery| async {
@@ -244,7 +244,7 @@ async fn a_query_in_flight_fails_at_once_when_its_handler_dies() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn messages_wait_for_a_crashed_module_and_reach_it_when_it_returns() {
-    for transport in BOTH {
+    for transport in ALL {
         let central = TestCentral::start(transport).await;
         let first = echo::connect(&central.connector, "echo").await.unwrap();
         let pinger = Module::builder("pinger")
@@ -304,7 +304,14 @@ async fn messages_wait_for_a_crashed_module_and_reach_it_when_it_returns() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_module_process_killed_and_restarted_still_gets_what_waited() {
-    let central = TestCentral::start(TransportKind::Zenoh).await;
+    for transport in [TransportKind::Zenoh, TransportKind::Local] {
+        module_process_killed_and_restarted(transport).await;
+    }
+}
+
+/// An echo process is killed with a query waiting for it; a new one gets the query.
+async fn module_process_killed_and_restarted(transport: TransportKind) {
+    let central = TestCentral::start(transport).await;
     let endpoint = central.endpoint.clone().unwrap();
     let mut echo_proc = spawn_tca(&["module", "echo", "--connect", &endpoint]);
     let pinger = Module::builder("pinger")
@@ -319,9 +326,10 @@ async fn a_module_process_killed_and_restarted_still_gets_what_waited() {
         pinger.query_with_timeout(&first, Duration::from_millis(500))
     })
     .await;
-    assert_eq!(pong, first);
+    assert_eq!(pong, first, "{transport:?}");
     echo_proc.kill();
-    // Wait until central has noticed (zenoh withdraws the module's liveliness token).
+    // Wait until central has noticed (zenoh withdraws the module's liveliness token; the local
+    // socket closes).
     within("central notices the kill", async {
         loop {
             let registry = pinger.registry().await.unwrap();
@@ -348,29 +356,35 @@ async fn a_module_process_killed_and_restarted_still_gets_what_waited() {
         })
     };
     tokio::time::sleep(Duration::from_millis(300)).await;
-    assert!(!waiting.is_finished());
+    assert!(!waiting.is_finished(), "{transport:?}: the query waits");
     let _echo_again = spawn_tca(&["module", "echo", "--connect", &endpoint]);
     let pong = within("held query answered", waiting)
         .await
         .unwrap()
         .unwrap();
-    assert_eq!(pong.seq, 2);
+    assert_eq!(pong.seq, 2, "{transport:?}");
     central.stop().await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_log_is_readable_after_central_is_killed() {
+    for endpoint in [free_endpoint(), unique_local_endpoint()] {
+        log_readable_after_kill(&endpoint).await;
+    }
+}
+
+/// A central process at `endpoint` logs 50 round trips and is killed with `kill -9`.
+async fn log_readable_after_kill(endpoint: &str) {
     let dir = tempfile::tempdir().unwrap();
     let log = dir.path().join("traffic.mcap");
-    let endpoint = free_endpoint();
     let mut central = spawn_tca(&[
         "central",
         "--listen",
-        &endpoint,
+        endpoint,
         "--log",
         log.to_str().unwrap(),
     ]);
-    let connector = tca_module::Connector::zenoh(endpoint.clone());
+    let connector = tca_module::Connector::endpoint(endpoint);
     let _echo = retry("central is up", || echo::connect(&connector, "echo")).await;
     let pinger = Module::builder("pinger").connect(&connector).await.unwrap();
     for seq in 0..50 {
@@ -397,7 +411,7 @@ async fn the_log_is_readable_after_central_is_killed() {
         })
         .filter(|e| e.class == Class::Reply && e.name.as_str() == "tca-ping")
         .count();
-    assert_eq!(answered, 50, "every reply is in the log");
+    assert_eq!(answered, 50, "{endpoint}: every reply is in the log");
     // The viewer decodes the data through the registered format.
     let lines = tca_logs::render(
         &file,
@@ -407,7 +421,7 @@ async fn the_log_is_readable_after_central_is_killed() {
             ..Default::default()
         },
     );
-    assert_eq!(lines.len(), 50, "{lines:?}");
+    assert_eq!(lines.len(), 50, "{endpoint}: {lines:?}");
     assert!(
         lines[0].contains("Ping { seq: 0, payload: [] }"),
         "{}",

@@ -1,8 +1,9 @@
-//! Central killed with `kill -9` in the middle of a walk: the walking modules
-//! are separate processes over zenoh. The log of the crashed central is readable; the walk
-//! command fails with a message saying how to resume; a new central on the same endpoint keeps
-//! the crashed one's log (as `traffic.1.mcap`) and every module registers with it by itself;
-//! the same `tca walk --connect` then walks on from where the leg stands to the goal, with no
+//! Central killed with `kill -9` in the middle of a walk: the walking modules are separate
+//! processes, over zenoh (and over the local link, ignored for now: see
+//! `over_the_local_link_too`). The log of the crashed central is readable; the walk command
+//! fails with a message saying how to resume; a new central on the same endpoint keeps the
+//! crashed one's log (as `traffic.1.mcap`) and every module registers with it by itself; the
+//! same `tca walk --connect` then walks on from where the leg stands to the goal, with no
 //! collision.
 
 mod common;
@@ -52,8 +53,25 @@ fn body_moves(log: &std::path::Path) -> usize {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_walk_interrupted_by_a_central_crash_resumes_where_the_leg_stands() {
+    walk_through_a_central_crash(&free_endpoint()).await;
+}
+
+/// The same over the local link. It fails today: the modules rejoin the new central within a
+/// fraction of a second, and the resumed walk collides once and stops ("the leg cannot move
+/// from where it stands"). Waiting 3 s before resuming made it pass, which points at the walk
+/// starting while the move that central's crash interrupted still plays out in the Controller
+/// (over zenoh the rejoin takes long enough for the leg to come to rest). The walk should wait
+/// for the leg to be at rest; then this test runs.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+#[ignore = "a walk resumed while the interrupted move still plays out collides (see its doc)"]
+async fn over_the_local_link_too() {
+    walk_through_a_central_crash(&unique_local_endpoint()).await;
+}
+
+/// The walk, central killed during it and started again on `endpoint`, and the walk resumed.
+async fn walk_through_a_central_crash(endpoint: &str) {
+    let endpoint = endpoint.to_owned();
     let dir = tempfile::tempdir().unwrap();
-    let endpoint = free_endpoint();
     let log = dir.path().join("traffic.mcap");
     let state = dir.path().join("state");
     let mut central = spawn_central(&endpoint, &log);

@@ -1,5 +1,5 @@
 //! CI's check of the load benchmark's promise, short: 100 modules exchanging queries, goals
-//! and informs through one central for 2 s, in-process and over zenoh, logging on. Nothing may
+//! and informs through one central for 2 s, in-process, over zenoh and over the local link, logging on. Nothing may
 //! be lost, central's queues stay within their limits, and the process's peak memory stays
 //! far from what unbounded queues would take. (The figures come from `cargo bench --bench
 //! load`; nothing here is timed.) This file holds a single test, so the peak memory is its own.
@@ -18,7 +18,11 @@ fn a_hundred_modules_lose_nothing_and_central_stays_bounded() {
         .enable_all()
         .build()
         .unwrap();
-    for transport in [TransportKind::InProcess, TransportKind::Zenoh] {
+    for transport in [
+        TransportKind::InProcess,
+        TransportKind::Zenoh,
+        TransportKind::Local,
+    ] {
         let options = LoadOptions {
             modules: 100,
             duration: Duration::from_secs(2),

@@ -7,8 +7,8 @@ use std::process::ExitStatus;
 use std::time::Duration;
 
 pub use tca_testkit::{
-    BOTH, STEP, TestCentral, TransportKind, free_endpoint, free_port, retry, wait_for_file,
-    walk_report, within, within_for,
+    ALL, BOTH, STEP, TestCentral, TransportKind, free_endpoint, free_port, retry,
+    unique_local_endpoint, wait_for_file, walk_report, within, within_for,
 };
 
 /// The `tca` binary under test.

@@ -43,6 +43,9 @@ pub enum TransportKind {
     InProcess,
     /// Central listens on a free loopback port; each module is its own zenoh client session.
     Zenoh,
+    /// Central listens on a Unix socket of its own (`local/load-PID-N`); each module is its
+    /// own connection over the local link.
+    Local,
 }
 
 impl TransportKind {
@@ -51,6 +54,7 @@ impl TransportKind {
         match self {
             TransportKind::InProcess => "in-process",
             TransportKind::Zenoh => "zenoh",
+            TransportKind::Local => "local",
         }
     }
 }
@@ -134,20 +138,23 @@ pub async fn run(options: &LoadOptions, log_dir: &Path) -> anyhow::Result<LoadRe
         bail!("a load needs at least 2 modules and a window of at least 1");
     }
     let log = log_dir.join("load.mcap");
-    let endpoint = free_endpoint()?;
+    let endpoint = match options.transport {
+        TransportKind::InProcess | TransportKind::Zenoh => free_endpoint()?,
+        TransportKind::Local => unique_local_endpoint(),
+    };
     let central = tca_central::start(StartOptions {
         config: options.config.clone(),
         log: Some(log.clone()),
         listen: match options.transport {
             TransportKind::InProcess => vec![],
-            TransportKind::Zenoh => vec![endpoint.clone()],
+            TransportKind::Zenoh | TransportKind::Local => vec![endpoint.clone()],
         },
     })
     .await
     .context("central did not start")?;
     let connector = match options.transport {
         TransportKind::InProcess => Connector::from(central.in_process()),
-        TransportKind::Zenoh => Connector::zenoh(endpoint),
+        TransportKind::Zenoh | TransportKind::Local => Connector::endpoint(endpoint),
     };
     let tally = Arc::new(Tally::default());
     let connecting = Instant::now();
@@ -229,6 +236,16 @@ pub async fn run(options: &LoadOptions, log_dir: &Path) -> anyhow::Result<LoadRe
 /// A zenoh endpoint on a free loopback port.
 fn free_endpoint() -> anyhow::Result<String> {
     tca_link::net::free_loopback_endpoint().context("no free loopback port")
+}
+
+/// A local endpoint no other run (in this process or another) uses.
+fn unique_local_endpoint() -> String {
+    static NEXT: AtomicU64 = AtomicU64::new(0);
+    format!(
+        "local/load-{}-{}",
+        std::process::id(),
+        NEXT.fetch_add(1, Relaxed)
+    )
 }
 
 /// Connects the modules, a few at a time, each handling its query, goal and inform.

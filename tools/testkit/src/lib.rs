@@ -1,5 +1,5 @@
 //! What the workspace's tests share, so that each is written once: bounded waits, free
-//! loopback endpoints, a central started for one test (in-process or over zenoh), the `tca`
+//! loopback endpoints, a central started for one test (in-process, over zenoh or over the local link), the `tca`
 //! binary run as a child process, and the JSON report of a walk. A dev-dependency only.
 //!
 //! # Layout
@@ -7,7 +7,8 @@
 //! - this file: [`within`], [`within_for`], [`retry`], [`wait_for_file`] (every await in a
 //!   test is bounded).
 //! - [`net`]: [`free_port`], [`free_endpoint`].
-//! - [`central`]: [`TransportKind`], [`TestCentral`], [`in_process_central`].
+//! - [`central`]: [`TransportKind`] ([`BOTH`], [`ALL`]), [`TestCentral`],
+//!   [`in_process_central`], [`unique_local_endpoint`].
 //! - [`tca`]: [`Tca`], the `tca` binary of the test's package: run to its end, spawned as a
 //!   [`ChildProcess`] killed on drop, asked for the registry; [`walk_report`].
 
@@ -19,7 +20,9 @@ use std::future::Future;
 use std::path::Path;
 use std::time::Duration;
 
-pub use central::{BOTH, TestCentral, TransportKind, in_process_central};
+pub use central::{
+    ALL, BOTH, TestCentral, TransportKind, in_process_central, unique_local_endpoint,
+};
 pub use net::{free_endpoint, free_port};
 pub use tca::{ChildProcess, Tca, walk_report};
 
