@@ -1,4 +1,5 @@
-//! Central goes away and comes back, over zenoh: the modules notice at once
+//! Central goes away and comes back, over zenoh and over the local link: the modules notice at
+//! once
 //! (queries in flight and task watchers fail with `CentralLost`, new sends are refused with the
 //! same error instead of hanging), keep retrying, and register again with the new central on
 //! the same endpoint, after which messages flow as before.
@@ -7,7 +8,7 @@ mod common;
 
 use std::time::Duration;
 
-use common::{STEP, free_endpoint, within};
+use common::{STEP, free_endpoint, unique_local_endpoint, within};
 use serde::{Deserialize, Serialize};
 use tca_central::{RunningCentral, StartOptions};
 use tca_module::{Connector, Module, ModuleError};
@@ -54,9 +55,18 @@ async fn server(connector: &Connector) -> Module {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn modules_rejoin_a_central_that_came_back() {
-    let endpoint = free_endpoint();
-    let central = central_at(&endpoint).await;
-    let connector = Connector::zenoh(endpoint.clone());
+    rejoin(&free_endpoint()).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn modules_rejoin_a_central_that_came_back_over_the_local_link() {
+    rejoin(&unique_local_endpoint()).await;
+}
+
+/// Central at `endpoint` stops with work in flight and starts again on the same endpoint.
+async fn rejoin(endpoint: &str) {
+    let central = central_at(endpoint).await;
+    let connector = Connector::endpoint(endpoint);
     let server = within("server connects", server(&connector)).await;
     let client = within(
         "client connects",
@@ -88,7 +98,8 @@ async fn modules_rejoin_a_central_that_came_back() {
         "parked goal: {outcome:?}"
     );
     // The client noticed (its calls failed); the server, which had nothing in flight,
-    // notices as soon as the liveliness of central's session goes, a moment later.
+    // notices as soon as the liveliness of central's session goes (over zenoh) or its socket
+    // ends (over the local link), a moment later.
     tokio::time::timeout(Duration::from_secs(2), async {
         while client.is_online() || server.is_online() {
             tokio::time::sleep(Duration::from_millis(10)).await;
@@ -110,7 +121,7 @@ async fn modules_rejoin_a_central_that_came_back() {
 
     // Central comes back on the same endpoint: both modules register again by themselves.
     tokio::time::sleep(Duration::from_millis(500)).await;
-    let central = central_at(&endpoint).await;
+    let central = central_at(endpoint).await;
     assert!(
         client.wait_online(STEP).await,
         "the client did not rejoin central"

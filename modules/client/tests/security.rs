@@ -2,7 +2,7 @@
 //! central with a policy file refuses strangers, wrong secrets and sends or registrations
 //! outside an identity's rules (nothing of them is routed), refuses zenoh clients without the
 //! right zenoh login, never logs a secret, and throttles a flooding module while others keep
-//! talking. In-process and over zenoh where it applies.
+//! talking. In-process, over zenoh and over the local link where it applies.
 
 mod common;
 
@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use common::{free_endpoint, within};
+use common::{free_endpoint, unique_local_endpoint, within};
 use serde::{Deserialize, Serialize};
 use tca_central::policy::hash_secret;
 use tca_central::{CentralConfig, Policy, RunningCentral, StartOptions};
@@ -270,6 +270,32 @@ async fn policy_in_process() {
     );
 }
 
+/// A central with `config` listening on a local endpoint of its own, and that endpoint.
+async fn start_local(config: CentralConfig) -> (RunningCentral, String) {
+    let endpoint = unique_local_endpoint();
+    let central = tca_central::start(StartOptions {
+        config,
+        log: None,
+        listen: vec![endpoint.clone()],
+    })
+    .await
+    .unwrap();
+    (central, endpoint)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn policy_over_the_local_link() {
+    let config = CentralConfig {
+        policy: Some(policy(None)),
+        ..CentralConfig::default()
+    };
+    let (central, endpoint) = start_local(config).await;
+    let connector = Connector::endpoint(endpoint);
+    refusals_at_hello(&connector).await;
+    permitted_and_refused_traffic(&connector, &central).await;
+    central.shutdown().await.unwrap();
+}
+
 fn users_file(dir: &Path) -> std::path::PathBuf {
     let path = dir.join("zenoh-users.txt");
     std::fs::write(&path, "tca-modules:zenoh-pass-1\n").unwrap();
@@ -476,5 +502,12 @@ async fn flooding_module_is_throttled_over_zenoh() {
     let (central, endpoint) = start(flood_config(Some(&users)), true, None).await;
     let connector = Connector::zenoh_with_login(&endpoint, "tca-modules", "zenoh-pass-1");
     flood(&connector, &central, false).await;
+    central.shutdown().await.unwrap();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn flooding_module_is_throttled_over_the_local_link() {
+    let (central, endpoint) = start_local(flood_config(None)).await;
+    flood(&Connector::endpoint(endpoint), &central, false).await;
     central.shutdown().await.unwrap();
 }

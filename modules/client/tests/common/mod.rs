@@ -2,4 +2,4 @@
 
 #![allow(unused_imports, unreachable_pub)]
 
-pub use tca_testkit::{STEP, free_endpoint, within};
+pub use tca_testkit::{STEP, free_endpoint, unique_local_endpoint, within};
