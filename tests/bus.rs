@@ -399,6 +399,7 @@ async fn log_readable_after_kill(endpoint: &str) {
     // Everything older than ~100 ms must survive a kill -9.
     tokio::time::sleep(Duration::from_millis(150)).await;
     central.kill();
+    remove_local_socket(endpoint);
     let file = tca_logs::LogFile::open(&log).expect("log readable after kill -9");
     let answered = file
         .records

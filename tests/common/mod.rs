@@ -7,8 +7,8 @@ use std::process::ExitStatus;
 use std::time::Duration;
 
 pub use tca_testkit::{
-    ALL, BOTH, STEP, TestCentral, TransportKind, free_endpoint, free_port, retry,
-    unique_local_endpoint, wait_for_file, walk_report, within, within_for,
+    ALL, BOTH, STEP, TestCentral, TransportKind, free_endpoint, free_port, remove_local_socket,
+    retry, unique_local_endpoint, wait_for_file, walk_report, within, within_for,
 };
 
 /// The `tca` binary under test.

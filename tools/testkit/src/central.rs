@@ -42,6 +42,17 @@ pub fn unique_local_endpoint() -> String {
     )
 }
 
+/// Removes the socket file a central killed on the local `endpoint` left behind (a central that
+/// stops cleanly removes its own); does nothing for other endpoints or a missing file.
+pub fn remove_local_socket(endpoint: &str) {
+    if !tca_link::LocalEndpoint::is_local(endpoint) {
+        return;
+    }
+    if let Ok(path) = tca_link::LocalEndpoint::parse(endpoint).and_then(|e| e.socket_path()) {
+        let _ = std::fs::remove_file(path);
+    }
+}
+
 /// A central for one test; its runtime task ends with the test.
 pub struct TestCentral {
     /// The running central (`None` once stopped).
@@ -135,5 +146,18 @@ mod tests {
             "{registry:?}"
         );
         central.stop().await;
+    }
+
+    #[test]
+    fn a_left_socket_is_removed() {
+        let endpoint = unique_local_endpoint();
+        let path = tca_link::LocalEndpoint::parse(&endpoint)
+            .and_then(|e| e.prepare())
+            .unwrap();
+        std::fs::write(&path, b"").unwrap();
+        remove_local_socket(&endpoint);
+        assert!(!path.exists(), "{} is still there", path.display());
+        remove_local_socket(&endpoint);
+        remove_local_socket("tcp/127.0.0.1:1");
     }
 }

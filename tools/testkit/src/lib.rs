@@ -8,7 +8,7 @@
 //!   test is bounded).
 //! - [`net`]: [`free_port`], [`free_endpoint`].
 //! - [`central`]: [`TransportKind`] ([`BOTH`], [`ALL`]), [`TestCentral`],
-//!   [`in_process_central`], [`unique_local_endpoint`].
+//!   [`in_process_central`], [`unique_local_endpoint`], [`remove_local_socket`].
 //! - [`tca`]: [`Tca`], the `tca` binary of the test's package: run to its end, spawned as a
 //!   [`ChildProcess`] killed on drop, asked for the registry; [`walk_report`].
 
@@ -21,7 +21,8 @@ use std::path::Path;
 use std::time::Duration;
 
 pub use central::{
-    ALL, BOTH, TestCentral, TransportKind, in_process_central, unique_local_endpoint,
+    ALL, BOTH, TestCentral, TransportKind, in_process_central, remove_local_socket,
+    unique_local_endpoint,
 };
 pub use net::{free_endpoint, free_port};
 pub use tca::{ChildProcess, Tca, walk_report};
