@@ -1,7 +1,7 @@
 //! Central killed with `kill -9` in the middle of a walk: the walking modules are separate
-//! processes, over zenoh (and over the local link, ignored for now: see
-//! `over_the_local_link_too`). The log of the crashed central is readable; the walk command
-//! fails with a message saying how to resume; a new central on the same endpoint keeps the
+//! processes, over zenoh and over the local link. The log of the crashed central is
+//! readable; the walk command fails with a message saying how to resume; a new central on
+//! the same endpoint keeps the
 //! crashed one's log (as `traffic.1.mcap`) and every module registers with it by itself; the
 //! same `tca walk --connect` then walks on from where the leg stands to the goal, with no
 //! collision.
@@ -56,14 +56,10 @@ async fn a_walk_interrupted_by_a_central_crash_resumes_where_the_leg_stands() {
     walk_through_a_central_crash(&free_endpoint()).await;
 }
 
-/// The same over the local link. It fails today: the modules rejoin the new central within a
-/// fraction of a second, and the resumed walk collides once and stops ("the leg cannot move
-/// from where it stands"). Waiting 3 s before resuming made it pass, which points at the walk
-/// starting while the move that central's crash interrupted still plays out in the Controller
-/// (over zenoh the rejoin takes long enough for the leg to come to rest). The walk should wait
-/// for the leg to be at rest; then this test runs.
+/// The same over the local link, where the modules rejoin the new central within a fraction
+/// of a second: the Controller settles the move whose command the crash abandoned, so the
+/// resumed walk plans from where the leg really stands, not from a move still playing out.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-#[ignore = "a walk resumed while the interrupted move still plays out collides (see its doc)"]
 async fn over_the_local_link_too() {
     walk_through_a_central_crash(&unique_local_endpoint()).await;
 }

@@ -191,6 +191,34 @@ struct Shared {
     pace: SpeedFactor,
 }
 
+/// Settles the move in progress when its command's handler ends before the move has played
+/// out (its task killed, or central gone and the handler with it). The simulator already
+/// stands at the move's end: from then on the queries answer that, and the next command
+/// starts from it, instead of the queries showing a move part-way that nothing waits for.
+struct SettleIfAbandoned<'a> {
+    shared: &'a Shared,
+    /// On central's simulated clock: the move's end. Otherwise the move ends when abandoned.
+    end_on_clock: Option<Instant>,
+    armed: bool,
+}
+
+impl SettleIfAbandoned<'_> {
+    /// The move played out: nothing to do.
+    fn disarm(mut self) {
+        self.armed = false;
+    }
+}
+
+impl Drop for SettleIfAbandoned<'_> {
+    fn drop(&mut self) {
+        if self.armed {
+            let at = self.end_on_clock.unwrap_or_else(Instant::now);
+            tracing::debug!("a move's command ended before the move played out; settling it");
+            self.shared.lock().settle(at);
+        }
+    }
+}
+
 impl Shared {
     fn lock(&self) -> MutexGuard<'_, Controller> {
         // A panic while holding the lock cannot leave the simulator half-updated in a way
@@ -257,6 +285,11 @@ impl Shared {
             ok = run.outcome.is_ok(),
             "controller command"
         );
+        let abandoned = SettleIfAbandoned {
+            shared: self,
+            end_on_clock: on_clock.then_some(run.started + run.simulated),
+            armed: true,
+        };
         // The move plays out: in wall-clock time, or (on central's simulated clock) at its
         // pace while its end is stamped its simulated duration later.
         let wait = if on_clock {
@@ -272,6 +305,7 @@ impl Shared {
         } else {
             Instant::now()
         };
+        abandoned.disarm();
         self.lock().settle(ended);
         // On the bus's simulated time (if the module uses it) the move took this long.
         ctx.spend(run.simulated);
