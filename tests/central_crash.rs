@@ -1,10 +1,9 @@
 //! Central killed with `kill -9` in the middle of a walk: the walking modules are separate
 //! processes, over zenoh and over the local link. The log of the crashed central is
 //! readable; the walk command fails with a message saying how to resume; a new central on
-//! the same endpoint keeps the
-//! crashed one's log (as `traffic.1.mcap`) and every module registers with it by itself; the
-//! same `tca walk --connect` then walks on from where the leg stands to the goal, with no
-//! collision.
+//! the same endpoint keeps the crashed one's log (as `traffic.1.mcap`) and every module
+//! registers with it by itself; the same `tca walk --connect` then walks on from where the
+//! leg stands to the goal, with no collision.
 
 mod common;
 
