@@ -35,6 +35,7 @@ pub mod id;
 pub mod message;
 pub mod route_error;
 pub mod sim_time;
+pub mod spelling;
 mod trace;
 pub mod value;
 
