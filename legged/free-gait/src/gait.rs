@@ -444,34 +444,31 @@ impl FreeGait {
         y: f64,
         rotation: &UnitQuaternion<f64>,
     ) -> f64 {
-        let mut ranges = Vec::with_capacity(stance.len());
-        let mut mean = 0.0;
+        let centre = |i: usize| centre_of_contact(&state.legs[i].foot, self.legs[i].radius);
+        let mean = stance
+            .iter()
+            .map(|&i| centre(i).z - self.legs[i].neutral.z)
+            .sum::<f64>()
+            / stance.len().max(1) as f64;
+        let Some(bias) = self.params.height_bias else {
+            return self.most_reached_height(state, stance, x, y, rotation, mean);
+        };
+        let (mut low, mut high) = (f64::NEG_INFINITY, f64::INFINITY);
         for &i in stance {
-            let info = &self.legs[i];
-            let centre = centre_of_contact(&state.legs[i].foot, info.radius);
-            mean += centre.z - info.neutral.z;
-            let local = rotation.inverse() * Vector3::new(centre.x - x, centre.y - y, 0.0);
-            // local z = centre.z - body z must lie in the range; with a bias, a foot out
-            // of reach at (x, y) bounds the height by its whole workspace.
+            let (info, c) = (&self.legs[i], centre(i));
+            let local = rotation.inverse() * Vector3::new(c.x - x, c.y - y, 0.0);
+            // local z = c.z - body z must lie in the range; a foot out of reach at (x, y)
+            // bounds the height by its whole workspace.
             let range = info
                 .z_at(local.x, local.y, self.params.foothold_spacing_m)
-                .or(self.params.height_bias.map(|_| info.z_range));
-            if let Some(range) = range {
-                ranges.push((centre.z - range.1, centre.z - range.0));
-            }
+                .unwrap_or(info.z_range);
+            low = low.max(c.z - range.1);
+            high = high.min(c.z - range.0);
         }
-        mean /= stance.len().max(1) as f64;
-        match self.params.height_bias {
-            Some(bias) => {
-                let low = ranges.iter().map(|r| r.0).fold(f64::NEG_INFINITY, f64::max);
-                let high = ranges.iter().map(|r| r.1).fold(f64::INFINITY, f64::min);
-                if low <= high && low.is_finite() && high.is_finite() {
-                    low + bias * (high - low)
-                } else {
-                    mean
-                }
-            }
-            None => self.most_reached_height(state, stance, x, y, rotation, mean),
+        if low <= high && low.is_finite() && high.is_finite() {
+            low + bias * (high - low)
+        } else {
+            mean
         }
     }
 
