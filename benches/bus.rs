@@ -7,15 +7,18 @@
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use bytes::Bytes;
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use tca_central::{Action, Central, CentralConfig, Event, StartOptions};
 use tca_messages::control::{Hello, Register, names};
 use tca_messages::*;
-use tca_module::{Connector, Module, ModuleError};
+use tca_module::{Connector, Module};
 use tca_ping::echo::{self, Ping, PingGoal};
+
+#[path = "common/goal_flood.rs"]
+mod goal_flood;
 use tokio::runtime::Runtime;
 use tokio::sync::{Notify, mpsc};
 
@@ -211,40 +214,7 @@ fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
     } else {
         "central/inproc_goal_throughput"
     };
-    let mut group = c.benchmark_group("throughput");
-    group.throughput(Throughput::Elements(1));
-    group.sample_size(10);
-    group.bench_function(name, |b| {
-        b.to_async(rt).iter_custom(|iters| {
-            let sender = sender.clone();
-            let count = count.clone();
-            let target = target.clone();
-            let notify = notify.clone();
-            async move {
-                let goal_count = count.load(Ordering::Relaxed) + iters;
-                target.store(goal_count, Ordering::Relaxed);
-                let start = Instant::now();
-                for seq in 0..iters {
-                    // Over its queue limit in central the sender is refused: it waits and
-                    // sends again (backpressure), as a real module would.
-                    while let Err(e) = sender.goal(&PingGoal { seq }) {
-                        match e {
-                            ModuleError::Route(RouteError::OverLimit { .. }) => {
-                                tokio::time::sleep(Duration::from_micros(100)).await
-                            }
-                            other => panic!("sending a goal failed: {other}"),
-                        }
-                    }
-                }
-                while count.load(Ordering::Relaxed) < goal_count {
-                    let _ =
-                        tokio::time::timeout(Duration::from_millis(10), notify.notified()).await;
-                }
-                start.elapsed()
-            }
-        })
-    });
-    group.finish();
+    goal_flood::measure(c, rt, name, &sender, &count, &target, &notify);
     rt.block_on(async { central.shutdown().await.unwrap() });
 }
 

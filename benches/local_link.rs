@@ -18,11 +18,13 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
 use bytes::Bytes;
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use criterion::{Criterion, criterion_group, criterion_main};
 use tca_central::StartOptions;
-use tca_messages::RouteError;
-use tca_module::{Connector, Module, ModuleError};
+use tca_module::{Connector, Module};
 use tca_ping::echo::{self, Ping, PingGoal};
+
+#[path = "common/goal_flood.rs"]
+mod goal_flood;
 use tokio::runtime::Runtime;
 use tokio::sync::{Notify, mpsc};
 
@@ -261,40 +263,7 @@ fn goal_throughput(c: &mut Criterion, rt: &Runtime, name: &str, connector: Conne
         let sender = connect_retrying(&connector, "sender").await;
         (sender, sink)
     });
-    let mut group = c.benchmark_group("throughput");
-    group.throughput(Throughput::Elements(1));
-    group.sample_size(10);
-    group.bench_function(name, |b| {
-        b.to_async(rt).iter_custom(|iters| {
-            let sender = sender.clone();
-            let count = count.clone();
-            let target = target.clone();
-            let notify = notify.clone();
-            async move {
-                let goal_count = count.load(Ordering::Relaxed) + iters;
-                target.store(goal_count, Ordering::Relaxed);
-                let start = Instant::now();
-                for seq in 0..iters {
-                    // Over its queue limit in central the sender is refused: it waits and
-                    // sends again (backpressure), as a real module would.
-                    while let Err(e) = sender.goal(&PingGoal { seq }) {
-                        match e {
-                            ModuleError::Route(RouteError::OverLimit { .. }) => {
-                                tokio::time::sleep(Duration::from_micros(100)).await
-                            }
-                            other => panic!("sending a goal failed: {other}"),
-                        }
-                    }
-                }
-                while count.load(Ordering::Relaxed) < goal_count {
-                    let _ =
-                        tokio::time::timeout(Duration::from_millis(10), notify.notified()).await;
-                }
-                start.elapsed()
-            }
-        })
-    });
-    group.finish();
+    goal_flood::measure(c, rt, name, &sender, &count, &target, &notify);
     rt.block_on(async {
         sender.close().await;
         sink.close().await;
