@@ -117,7 +117,8 @@ async fn one_central_routes_between_local_and_zenoh_modules() {
     wait_for_modules(&local, &["echo"]).await;
     assert_eq!(ping(&local, "echo", 20).await, 20);
     echo.kill();
-    // ...and the other way round.
+    // ...and the other way round, at once: central sees that the killed echo's process is
+    // gone and lets the new one take its name even before zenoh reports the old one lost.
     let _echo = spawn_tca(&["module", "echo", "--connect", &local]);
     retry("the local echo registered", || async {
         let modules = connected(&zenoh).await?;

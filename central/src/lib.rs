@@ -24,6 +24,7 @@
 pub mod config;
 pub mod core;
 pub mod policy;
+pub mod process;
 pub mod runtime;
 mod zenoh_router;
 

@@ -83,6 +83,16 @@ pub struct Hello {
     pub simulated_time: bool,
 }
 
+/// This machine's host name as a [`Hello`] carries it (`$HOSTNAME`, else `/etc/hostname`,
+/// else `unknown`).
+pub fn this_host() -> String {
+    std::env::var("HOSTNAME")
+        .ok()
+        .or_else(|| std::fs::read_to_string("/etc/hostname").ok())
+        .map(|h| h.trim().to_owned())
+        .unwrap_or_else(|| "unknown".into())
+}
+
 /// Who a module says it is, checked by central against its policy file. The secret travels in
 /// the hello frame (central never logs it): use it on a trusted network or inside zenoh's
 /// authenticated transport.

@@ -59,6 +59,20 @@ impl Central {
         }
         if let Some(existing) = self.modules.get(&hello.module)
             && let Some(other) = existing.link
+            && crate::process::is_gone(&existing.hello.host, existing.hello.pid)
+        {
+            // Its process is gone but its link has not dropped yet: the new one takes over.
+            tracing::warn!(
+                module = %hello.module,
+                old_link = other,
+                old_pid = existing.hello.pid,
+                "module's old process is gone; its link is replaced by the new hello"
+            );
+            self.link_closed(other, out);
+            out.push(Action::Close(other));
+        }
+        if let Some(existing) = self.modules.get(&hello.module)
+            && let Some(other) = existing.link
         {
             let reason = format!(
                 "a module named {} is already connected (link {other}, pid {} on {}); \

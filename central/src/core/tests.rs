@@ -95,12 +95,23 @@ impl Harness {
     }
 
     fn connect(&mut self, link: LinkId, module: &str, capacity: u32) -> Vec<(LinkId, Envelope)> {
+        self.connect_from(link, module, capacity, "test", 1)
+    }
+
+    fn connect_from(
+        &mut self,
+        link: LinkId,
+        module: &str,
+        capacity: u32,
+        host: &str,
+        pid: u32,
+    ) -> Vec<(LinkId, Envelope)> {
         self.step(Event::Opened(link));
         let hello = Hello {
             module: ModuleName::new(module).unwrap(),
             capacity,
-            pid: 1,
-            host: "test".into(),
+            pid,
+            host: host.into(),
             simulated_time: false,
         };
         let mut env = self.envelope(
@@ -201,6 +212,35 @@ fn hello_is_welcomed_and_a_second_module_of_the_same_name_refused() {
     let sent = h.connect(2, "ctl", 1);
     let err = error_of(&sent[0].1);
     assert!(err.to_string().contains("already connected"), "{err}");
+    assert_eq!(h.central.connected_modules().len(), 1);
+}
+
+#[test]
+fn a_module_whose_process_is_gone_is_replaced_by_its_restart() {
+    let mut h = Harness::new();
+    let host = tca_messages::control::this_host();
+    let mut old = std::process::Command::new("sleep")
+        .arg("30")
+        .spawn()
+        .unwrap();
+    h.connect_from(1, "ctl", 1, &host, old.id());
+    // Same name while the old process lives: refused.
+    let sent = h.connect_from(2, "ctl", 1, &host, std::process::id());
+    assert!(
+        error_of(&sent[0].1)
+            .to_string()
+            .contains("already connected")
+    );
+    // The old process gone, its link not yet dropped: the new hello takes over.
+    old.kill().unwrap();
+    old.wait().unwrap();
+    let sent = h.connect_from(3, "ctl", 1, &host, std::process::id());
+    let welcome = sent
+        .iter()
+        .find(|(link, _)| *link == 3)
+        .map(|(_, env)| decode_data::<Welcome>(&env.data).unwrap())
+        .expect("a welcome on link 3");
+    assert_eq!(welcome.link, 3);
     assert_eq!(h.central.connected_modules().len(), 1);
 }
 

@@ -186,7 +186,7 @@ impl ModuleBuilder {
             module: name.clone(),
             capacity: self.capacity,
             pid: std::process::id(),
-            host: hostname(),
+            host: tca_messages::control::this_host(),
             simulated_time: self.sim_time,
         };
         let credentials = self.credentials.or_else(credentials_from_env);
@@ -295,12 +295,4 @@ async fn next_answer(
         }
         early.push(envelope);
     }
-}
-
-fn hostname() -> String {
-    std::env::var("HOSTNAME")
-        .ok()
-        .or_else(|| std::fs::read_to_string("/etc/hostname").ok())
-        .map(|h| h.trim().to_owned())
-        .unwrap_or_else(|| "unknown".into())
 }
