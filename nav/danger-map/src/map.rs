@@ -136,9 +136,18 @@ impl DangerMap {
         });
         let step_rect = region.grown(border, nx, ny);
         let res = self.cells.resolution_m();
+        // Heights copied once into a dense patch: the circles and windows read them many
+        // times each.
+        let heights_rect = step_rect.grown(self.footprint.window_half as usize, nx, ny);
+        let recent = &Dense::copy(recent, heights_rect);
+        let older_dense = any_blocked.then(|| Dense::copy(older, heights_rect));
         let recent_steps = StepPatch::compute(&self.params, res, recent, step_rect);
-        let older_steps =
-            any_blocked.then(|| StepPatch::compute(&self.params, res, older, step_rect));
+        let older_steps = older_dense.as_ref().map(|older| {
+            (
+                older,
+                StepPatch::compute(&self.params, res, older, step_rect),
+            )
+        });
         let mut changed = Vec::new();
         for iy in region.y0..=region.y1 {
             for ix in region.x0..=region.x1 {
@@ -146,11 +155,11 @@ impl DangerMap {
                 let before = self.cell(c);
                 let (ixs, iys) = (ix as isize, iy as isize);
                 let after = match (&older_steps, before.is_traversable()) {
-                    (Some(steps), false) => assess_with(
+                    (Some((older, steps)), false) => assess_with(
                         &self.params,
                         &self.footprint,
                         res,
-                        older,
+                        *older,
                         |x, y| steps.at(x, y),
                         ixs,
                         iys,
@@ -200,5 +209,35 @@ impl StepPatch {
         }
         let i = (iy as usize - self.rect.y0) * self.rect.width() + (ix as usize - self.rect.x0);
         self.steps[i]
+    }
+}
+
+/// Heights of a rectangle copied out of a [`HeightView`] (NaN where unknown).
+struct Dense {
+    rect: CellRect,
+    h: Vec<f64>,
+}
+
+impl Dense {
+    fn copy(view: &impl HeightView, rect: CellRect) -> Self {
+        let mut h = Vec::with_capacity(rect.width() * rect.height());
+        for iy in rect.y0..=rect.y1 {
+            for ix in rect.x0..=rect.x1 {
+                h.push(view.height(ix as isize, iy as isize).unwrap_or(f64::NAN));
+            }
+        }
+        Self { rect, h }
+    }
+}
+
+impl HeightView for Dense {
+    #[inline]
+    fn height(&self, ix: isize, iy: isize) -> Option<f64> {
+        if !self.rect.contains(ix, iy) {
+            return None;
+        }
+        let i = (iy as usize - self.rect.y0) * self.rect.width() + (ix as usize - self.rect.x0);
+        let v = self.h[i];
+        (!v.is_nan()).then_some(v)
     }
 }

@@ -10,7 +10,7 @@ use crate::{Pose2, gaussian};
 /// Each run draws a fixed bias: every translation is scaled and rotated so that its error
 /// is `drift` of its length in a random direction (1.2–1.3 % in the paper's tests). On top
 /// of it, each increment gets white noise of a fifth of that per step, and each turn a
-/// heading error of 1 % of the angle turned.
+/// heading error of 0.2 % of the angle turned.
 #[derive(Debug, Clone)]
 pub struct DriftingOdometry {
     drift: f64,
@@ -50,7 +50,7 @@ impl DriftingOdometry {
         let sigma = 0.2 * self.drift * len;
         let fe = bc * f - bs * l + sigma * gaussian(&mut self.rng);
         let le = bs * f + bc * l + sigma * gaussian(&mut self.rng);
-        let te = t + 0.01 * t.abs() * gaussian(&mut self.rng);
+        let te = t + 0.002 * t.abs() * gaussian(&mut self.rng);
         // The increment is applied in the estimated frame: heading errors carry on.
         self.estimate = self.estimate.moved(fe, le, te);
         self.estimate

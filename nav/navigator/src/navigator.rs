@@ -1,0 +1,385 @@
+//! The navigation loop's decisions, from the estimated pose and the depth image alone.
+
+use nalgebra::Point2;
+use tca_nav_danger_map::{DangerError, DangerMap, DangerParams};
+use tca_nav_dstar_lite::{Cell, CostGrid, DStarLite, PlanError};
+use tca_nav_sensing::{CameraMount, CameraParams, DepthImage, Pose2, wrap};
+use tca_nav_terrain_map::{Ageing, TerrainMap, TerrainMapError};
+use tca_robot::CellIndex;
+
+/// Why navigation could not start or go on.
+#[derive(Debug, thiserror::Error)]
+pub enum NavError {
+    /// The danger parameters or map are not valid.
+    #[error(transparent)]
+    Danger(#[from] DangerError),
+    /// The terrain map could not be made.
+    #[error(transparent)]
+    Terrain(#[from] TerrainMapError),
+    /// The camera's parameters are not valid.
+    #[error(transparent)]
+    Camera(#[from] tca_nav_sensing::SensingError),
+    /// The planner refused.
+    #[error(transparent)]
+    Plan(#[from] PlanError),
+    /// The start or goal lies outside the map.
+    #[error("the {what} ({x:.3}, {y:.3}) m lies outside the map; give one on the terrain")]
+    OffMap {
+        /// "start" or "goal".
+        what: &'static str,
+        /// East, m.
+        x: f64,
+        /// North, m.
+        y: f64,
+    },
+}
+
+/// The navigator's parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NavParams {
+    /// The robot's danger parameters.
+    pub danger: DangerParams,
+    /// Weight of danger against length in D* Lite's edge cost (per cell). 2: one cell of
+    /// unknown or just-barely-traversable ground (d = 1) costs as much as three cells of
+    /// flat ground, so a detour is taken when it is less than about three times as long
+    /// as the crossing it avoids; above 1 as the paper asks, and low enough that the path
+    /// still runs through unknown ground toward the goal rather than hugging what is
+    /// already mapped.
+    pub beta: f64,
+    /// The terrain map's age windows.
+    pub ageing: Ageing,
+    /// The camera.
+    pub camera: CameraParams,
+    /// Where the camera sits.
+    pub mount: CameraMount,
+    /// Farthest point put into the map, m.
+    pub map_range_m: f64,
+    /// Goal reached when the estimate is this close, m.
+    pub goal_tolerance_m: f64,
+    /// Half the angle of an exploration turn, rad (ε).
+    pub explore_half_angle_rad: f64,
+    /// Spacing of exploration turns, m (l).
+    pub explore_spacing_m: f64,
+    /// Fastest forward speed, m/s.
+    pub max_forward_mps: f64,
+    /// Fastest turn, rad/s.
+    pub max_turn_rps: f64,
+    /// Gain of the turn speed on the heading error, 1/s.
+    pub turn_gain: f64,
+    /// Distance ahead on the path the follower steers to, m.
+    pub lookahead_m: f64,
+    /// Time between frames, s: each command holds for one frame.
+    pub frame_period_s: f64,
+}
+
+impl NavParams {
+    /// Defaults for a robot with these danger parameters and camera mount.
+    pub fn new(danger: DangerParams, mount: CameraMount, max_forward_mps: f64) -> Self {
+        Self {
+            danger,
+            beta: 2.0,
+            ageing: Ageing::PAPER,
+            camera: CameraParams::stereo_default(),
+            mount,
+            map_range_m: 1.6,
+            goal_tolerance_m: 0.04,
+            explore_half_angle_rad: std::f64::consts::PI / 8.0,
+            explore_spacing_m: 0.2,
+            max_forward_mps,
+            max_turn_rps: 0.6,
+            turn_gain: 1.5,
+            lookahead_m: 0.12,
+            frame_period_s: 0.25,
+        }
+    }
+}
+
+/// What the navigator wants done this frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Command {
+    /// Drive at these speeds for the frame.
+    Drive {
+        /// Forward, m/s.
+        forward_mps: f64,
+        /// Turn, rad/s (positive to the left).
+        turn_rps: f64,
+    },
+    /// The goal is reached by the estimate.
+    Reached,
+}
+
+#[derive(Debug, Clone)]
+struct Exploration {
+    /// Headings to turn to, in order.
+    targets: Vec<f64>,
+}
+
+/// The navigator: terrain map, danger map, D* Lite and motion control.
+#[derive(Debug, Clone)]
+pub struct Navigator {
+    params: NavParams,
+    terrain: TerrainMap,
+    danger: DangerMap,
+    planner: DStarLite,
+    goal: Point2<f64>,
+    path: Vec<Cell>,
+    replans: u64,
+    replanned_since_turn: bool,
+    exploration: Option<Exploration>,
+    last_explored: Option<(Point2<f64>, Pose2)>,
+    travelled_since_turn_m: f64,
+    last_pose: Option<Pose2>,
+    turns: u64,
+}
+
+impl Navigator {
+    /// A navigator over a map of `nx` x `ny` cells of `resolution_m` (cell (0, 0) centred
+    /// at `origin`) from `start` to `goal` (world frame). The first path runs straight
+    /// through the unknown map.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        params: NavParams,
+        origin: Point2<f64>,
+        resolution_m: f64,
+        nx: usize,
+        ny: usize,
+        start: Pose2,
+        goal: Point2<f64>,
+    ) -> Result<Self, NavError> {
+        let terrain = TerrainMap::new(origin, resolution_m, nx, ny, params.ageing)?;
+        let danger = DangerMap::new(params.danger.clone(), origin, resolution_m, nx, ny)?;
+        let grid = CostGrid::filled(nx, ny, params.beta, 1.0)?;
+        let cell_of = |what, x: f64, y: f64| {
+            danger
+                .cells()
+                .cell_at(Point2::new(x, y))
+                .map(|c| Cell::new(c.ix, c.iy))
+                .ok_or(NavError::OffMap { what, x, y })
+        };
+        let s = cell_of("start", start.x, start.y)?;
+        let g = cell_of("goal", goal.x, goal.y)?;
+        let mut planner = DStarLite::new(grid, s, g)?;
+        let path = planner.plan()?.cells;
+        Ok(Self {
+            params,
+            terrain,
+            danger,
+            planner,
+            goal,
+            path,
+            replans: 0,
+            replanned_since_turn: false,
+            exploration: None,
+            last_explored: None,
+            travelled_since_turn_m: 0.0,
+            last_pose: None,
+            turns: 0,
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &NavParams {
+        &self.params
+    }
+
+    /// The danger map as perceived.
+    pub fn danger(&self) -> &DangerMap {
+        &self.danger
+    }
+
+    /// The planned path, world frame.
+    pub fn path(&self) -> Vec<Point2<f64>> {
+        self.path
+            .iter()
+            .map(|c| self.danger.cells().cell_center(CellIndex::new(c.ix, c.iy)))
+            .collect()
+    }
+
+    /// Times changed cells touched the path and the new plan left the old one.
+    pub fn replans(&self) -> u64 {
+        self.replans
+    }
+
+    /// Exploration turns started.
+    pub fn exploration_turns(&self) -> u64 {
+        self.turns
+    }
+
+    /// D* Lite's expansions so far.
+    pub fn expansions(&self) -> u64 {
+        self.planner.total_expansions()
+    }
+
+    /// One frame: the estimated pose `estimate`, the ground height under it `ground_m`
+    /// (from the 6-DoF odometry; drift is modelled in the plane only) and this frame's
+    /// depth image. Returns what to do, or [`PlanError::NoPath`] when the goal is cut off.
+    pub fn step(
+        &mut self,
+        estimate: Pose2,
+        ground_m: f64,
+        image: &DepthImage,
+    ) -> Result<Command, NavError> {
+        if let Some(last) = self.last_pose {
+            self.travelled_since_turn_m += last.distance(&estimate);
+        }
+        self.last_pose = Some(estimate);
+        let here = Point2::new(estimate.x, estimate.y);
+        let to_goal = self.goal - here;
+        if to_goal.norm() <= self.params.goal_tolerance_m {
+            return Ok(Command::Reached);
+        }
+        // Map and danger update.
+        let cam = self.params.mount.camera_pose(&estimate, ground_m);
+        let points = image.points(&self.params.camera, &cam, self.params.map_range_m);
+        let mut affected = false;
+        if let Some(rect) = self.terrain.insert_frame(points) {
+            let changed = self
+                .danger
+                .update(rect, &self.terrain.recent(), &self.terrain.older());
+            let near_path = self.path_neighbourhood();
+            for c in changed {
+                let d = self.danger.cell(c).danger;
+                let cell = Cell::new(c.ix, c.iy);
+                self.planner.set_danger(cell, d)?;
+                if near_path.contains(&cell) {
+                    affected = true;
+                }
+            }
+        }
+        let cells = self.danger.cells();
+        let me = cells.nearest_cell(here);
+        self.planner.move_start(Cell::new(me.ix, me.iy))?;
+        let path = self.planner.plan()?.cells;
+        if affected && !self.path.ends_with(&path) {
+            self.replans += 1;
+            self.replanned_since_turn = true;
+        }
+        self.path = path;
+        Ok(self.motion(estimate))
+    }
+
+    fn path_neighbourhood(&self) -> std::collections::HashSet<Cell> {
+        let mut set = std::collections::HashSet::new();
+        for c in &self.path {
+            for dy in -1isize..=1 {
+                for dx in -1isize..=1 {
+                    let (x, y) = (c.ix as isize + dx, c.iy as isize + dy);
+                    if x >= 0 && y >= 0 {
+                        set.insert(Cell::new(x as usize, y as usize));
+                    }
+                }
+            }
+        }
+        set
+    }
+
+    fn cell_point(&self, c: Cell) -> Point2<f64> {
+        self.danger.cells().cell_center(CellIndex::new(c.ix, c.iy))
+    }
+
+    fn motion(&mut self, est: Pose2) -> Command {
+        let here = Point2::new(est.x, est.y);
+        if let Some(cmd) = self.continue_exploration(est) {
+            return cmd;
+        }
+        if let Some(cell) = self.cell_to_explore(est) {
+            let b = bearing(here, cell);
+            let e = self.params.explore_half_angle_rad;
+            self.exploration = Some(Exploration {
+                targets: vec![wrap(b + e), wrap(b - e), b],
+            });
+            self.last_explored = Some((cell, est));
+            self.travelled_since_turn_m = 0.0;
+            self.replanned_since_turn = false;
+            self.turns += 1;
+            if let Some(cmd) = self.continue_exploration(est) {
+                return cmd;
+            }
+        }
+        self.follow(est)
+    }
+
+    fn continue_exploration(&mut self, est: Pose2) -> Option<Command> {
+        let dt_turn = 0.08; // rad: close enough to a target heading
+        let ex = self.exploration.as_mut()?;
+        while let Some(&t) = ex.targets.first() {
+            let err = wrap(t - est.yaw);
+            if err.abs() > dt_turn {
+                let turn = (self.params.turn_gain * 2.0 * err)
+                    .clamp(-self.params.max_turn_rps, self.params.max_turn_rps);
+                return Some(Command::Drive {
+                    forward_mps: 0.0,
+                    turn_rps: turn,
+                });
+            }
+            ex.targets.remove(0);
+        }
+        self.exploration = None;
+        None
+    }
+
+    /// The first path cell within camera range whose certainty is below 1, if the
+    /// spacing rules allow a turn for it.
+    fn cell_to_explore(&self, est: Pose2) -> Option<Point2<f64>> {
+        let here = Point2::new(est.x, est.y);
+        let l = self.params.explore_spacing_m;
+        let candidate = self.path.iter().skip(1).find_map(|c| {
+            let p = self.cell_point(*c);
+            let d = (p - here).norm();
+            if d > self.params.map_range_m {
+                return None;
+            }
+            let known = self.danger.cell(CellIndex::new(c.ix, c.iy)).certainty;
+            (d >= 0.3 && known < 1.0).then_some(p)
+        })?;
+        let Some((prev, _)) = self.last_explored else {
+            return Some(candidate);
+        };
+        if (candidate - prev).norm() < l {
+            return None;
+        }
+        let angle = (bearing(here, candidate) - bearing(here, prev)).abs();
+        let angle = wrap(angle).abs();
+        (self.travelled_since_turn_m >= l
+            || angle >= self.params.explore_half_angle_rad
+            || self.replanned_since_turn)
+            .then_some(candidate)
+    }
+
+    fn follow(&self, est: Pose2) -> Command {
+        let here = Point2::new(est.x, est.y);
+        let dist_goal = (self.goal - here).norm();
+        // The point `lookahead_m` along the path from the robot (the goal near the end).
+        let mut target = self.goal;
+        let mut along = 0.0;
+        let mut prev = here;
+        for c in self.path.iter().skip(1) {
+            let p = self.cell_point(*c);
+            along += (p - prev).norm();
+            prev = p;
+            if along >= self.params.lookahead_m {
+                target = p;
+                break;
+            }
+        }
+        if dist_goal < self.params.lookahead_m {
+            target = self.goal;
+        }
+        let err = wrap(bearing(here, target) - est.yaw);
+        let turn = (self.params.turn_gain * err)
+            .clamp(-self.params.max_turn_rps, self.params.max_turn_rps);
+        let forward = if err.abs() > 0.6 {
+            0.0
+        } else {
+            self.params.max_forward_mps * err.cos()
+        };
+        Command::Drive {
+            forward_mps: forward.min(dist_goal / self.params.frame_period_s),
+            turn_rps: turn,
+        }
+    }
+}
+
+fn bearing(from: Point2<f64>, to: Point2<f64>) -> f64 {
+    (to.y - from.y).atan2(to.x - from.x)
+}

@@ -1,0 +1,216 @@
+//! The navigation loop closed in simulation: camera, odometry, navigator, base.
+
+use std::time::Instant;
+
+use nalgebra::Point2;
+use serde::Serialize;
+use tca_nav_danger_map::DangerMap;
+use tca_nav_dstar_lite::{Cell, CostGrid, DStarLite, PlanError};
+use tca_nav_sensing::{DepthCamera, DriftingOdometry, Pose2};
+use tca_robot::{CellIndex, HeightField};
+
+use crate::{Base, Command, NavError, NavParams, Navigator};
+
+/// What to run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunOptions {
+    /// The true start pose.
+    pub start: Pose2,
+    /// The goal, m east and north of the start.
+    pub goal_offset: [f64; 2],
+    /// Odometry drift, fraction of the distance travelled.
+    pub drift: f64,
+    /// Seed of the camera's and the odometry's noise.
+    pub seed: u64,
+    /// Frames before giving up.
+    pub max_frames: usize,
+}
+
+/// The outcome of a run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunReport {
+    /// The base driven.
+    pub robot: String,
+    /// Whether the estimate reached the goal.
+    pub reached: bool,
+    /// Why the run ended.
+    pub reason: String,
+    /// True distance travelled, m.
+    pub distance_m: f64,
+    /// True final position against the goal, m.
+    pub final_error_m: f64,
+    /// True final position against the estimate, m.
+    pub estimate_error_m: f64,
+    /// The true positions, world frame, one per frame.
+    pub path: Vec<[f64; 2]>,
+    /// The estimated positions, one per frame.
+    pub estimated_path: Vec<[f64; 2]>,
+    /// The last planned path.
+    pub planned_path: Vec<[f64; 2]>,
+    /// Replans because changed cells touched the path.
+    pub replans: u64,
+    /// Exploration turns.
+    pub exploration_turns: u64,
+    /// Frames run.
+    pub frames: usize,
+    /// Frames per second of computing (capture, mapping, danger, planning, control).
+    pub loop_hz: f64,
+    /// Drive commands the base could not carry out (blocked by a step).
+    pub collisions: u64,
+    /// Frames in which the base tipped over.
+    pub falls: u64,
+    /// Frames in which the robot's true cell is untraversable on the true terrain.
+    pub untraversable_frames: u64,
+    /// Length of the D* Lite path on the true danger map, m (`None` if there is none).
+    pub true_map_path_m: Option<f64>,
+}
+
+/// The danger map of the whole true terrain, for judging a run.
+pub fn true_danger_map(terrain: &HeightField, params: &NavParams) -> Result<DangerMap, NavError> {
+    let g = terrain.grid();
+    Ok(DangerMap::from_view(
+        params.danger.clone(),
+        g.origin(),
+        g.resolution_m(),
+        g.nx(),
+        g.ny(),
+        terrain,
+    )?)
+}
+
+/// Length of the D* Lite path from `start` to `goal` on a danger map, m.
+pub fn true_map_path_m(
+    truth: &DangerMap,
+    beta: f64,
+    start: Point2<f64>,
+    goal: Point2<f64>,
+) -> Result<Option<f64>, NavError> {
+    let cells = truth.cells();
+    let dangers = cells.cells().iter().map(|c| c.danger).collect();
+    let grid = CostGrid::from_dangers(cells.nx(), cells.ny(), beta, dangers)?;
+    let s = cells.nearest_cell(start);
+    let g = cells.nearest_cell(goal);
+    let mut planner = DStarLite::new(grid, Cell::new(s.ix, s.iy), Cell::new(g.ix, g.iy))?;
+    match planner.plan() {
+        Ok(p) => Ok(Some(
+            p.cells
+                .windows(2)
+                .map(|w| {
+                    let (a, b) = (w[0], w[1]);
+                    (cells.cell_center(CellIndex::new(a.ix, a.iy))
+                        - cells.cell_center(CellIndex::new(b.ix, b.iy)))
+                    .norm()
+                })
+                .sum(),
+        )),
+        Err(PlanError::NoPath { .. }) => Ok(None),
+        Err(e) => Err(e.into()),
+    }
+}
+
+/// Runs the navigator on `base` over `terrain` until the goal, a dead end or
+/// `max_frames`. Returns the report and the navigator as it ended (for the picture).
+pub fn run(
+    terrain: &HeightField,
+    base: &mut dyn Base,
+    params: NavParams,
+    opts: &RunOptions,
+) -> Result<(RunReport, Navigator), NavError> {
+    let g = terrain.grid();
+    let goal = Point2::new(
+        opts.start.x + opts.goal_offset[0],
+        opts.start.y + opts.goal_offset[1],
+    );
+    let truth = true_danger_map(terrain, &params)?;
+    let true_path = true_map_path_m(
+        &truth,
+        params.beta,
+        Point2::new(opts.start.x, opts.start.y),
+        goal,
+    )?;
+    let mut camera = DepthCamera::new(params.camera.clone(), opts.seed)?;
+    let mut odometry = DriftingOdometry::new(opts.start, opts.drift, opts.seed);
+    let period = params.frame_period_s;
+    let mount = params.mount;
+    let mut nav = Navigator::new(
+        params,
+        g.origin(),
+        g.resolution_m(),
+        g.nx(),
+        g.ny(),
+        opts.start,
+        goal,
+    )?;
+    let mut report = RunReport {
+        robot: base.name().to_string(),
+        reached: false,
+        reason: format!("no goal within {} frames", opts.max_frames),
+        distance_m: 0.0,
+        final_error_m: 0.0,
+        estimate_error_m: 0.0,
+        path: Vec::new(),
+        estimated_path: Vec::new(),
+        planned_path: Vec::new(),
+        replans: 0,
+        exploration_turns: 0,
+        frames: 0,
+        loop_hz: 0.0,
+        collisions: 0,
+        falls: 0,
+        untraversable_frames: 0,
+        true_map_path_m: true_path,
+    };
+    let mut computing = 0.0;
+    let mut pose = base.true_pose();
+    for _ in 0..opts.max_frames {
+        report.frames += 1;
+        report.path.push([pose.x, pose.y]);
+        let est = odometry.estimate();
+        report.estimated_path.push([est.x, est.y]);
+        if let Some(c) = truth.cells().cell_at(Point2::new(pose.x, pose.y))
+            && !truth.cell(c).is_traversable()
+        {
+            report.untraversable_frames += 1;
+        }
+        let t0 = Instant::now();
+        let ground = terrain.height_at(pose.x, pose.y);
+        let image = camera.capture(terrain, &mount.camera_pose(&pose, ground));
+        let step = nav.step(est, ground, &image);
+        computing += t0.elapsed().as_secs_f64();
+        match step {
+            Ok(Command::Reached) => {
+                report.reached = true;
+                report.reason = "goal reached by the estimate".into();
+                break;
+            }
+            Ok(Command::Drive {
+                forward_mps,
+                turn_rps,
+            }) => {
+                let m = base.drive(forward_mps, turn_rps, period);
+                report.collisions += u64::from(m.collided);
+                report.falls += u64::from(m.fell);
+                report.distance_m += pose.distance(&m.pose);
+                odometry.update(&pose, &m.pose);
+                pose = m.pose;
+            }
+            Err(NavError::Plan(PlanError::NoPath { .. })) => {
+                report.reason = "no traversable path to the goal on the map as perceived".into();
+                break;
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    let est = odometry.estimate();
+    report.final_error_m = (Point2::new(pose.x, pose.y) - goal).norm();
+    report.estimate_error_m = pose.distance(&est);
+    report.planned_path = nav.path().iter().map(|p| [p.x, p.y]).collect();
+    report.replans = nav.replans();
+    report.exploration_turns = nav.exploration_turns();
+    report.loop_hz = if computing > 0.0 {
+        report.frames as f64 / computing
+    } else {
+        0.0
+    };
+    Ok((report, nav))
+}
