@@ -177,6 +177,13 @@ fn bad_input_gets_clear_errors() {
         stderr(&out)
     );
 
+    // An open central on every interface, with no policy: refused, saying what to do.
+    let out = tca(&["central", "--listen", "tcp/0.0.0.0:7"]);
+    assert!(!out.status.success());
+    for hint in ["reachable from other machines", "--policy", "--insecure"] {
+        assert!(stderr(&out).contains(hint), "{hint}: {}", stderr(&out));
+    }
+
     let out = tca(&["ping", "-n", "0"]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("at least 1"), "{}", stderr(&out));

@@ -49,6 +49,16 @@ pub enum CentralError {
     /// Central has stopped.
     #[error("central has stopped")]
     Stopped,
+    /// Central was asked to listen where other machines can reach it, with no policy.
+    #[error(
+        "refusing to listen on {0} (reachable from other machines) with no policy: any process \
+         that finds central could join under any name and send anything. Give a policy \
+         (--policy FILE: identities with secrets, what each may register and send; see \
+         policy.example.toml and the README's security section), listen on a loopback address \
+         (tcp/127.0.0.1:7447) or a local socket (local), or, on a network you trust, say \
+         --insecure"
+    )]
+    Insecure(String),
     /// The policy file could not be loaded.
     #[error(transparent)]
     Policy(#[from] PolicyError),

@@ -242,6 +242,10 @@ pub struct StartOptions {
     /// `local/NAME` (a Unix socket, for modules on this machine) and zenoh ones (e.g.
     /// `tcp/127.0.0.1:7447`), any mix of them.
     pub listen: Vec<String>,
+    /// Listen on endpoints other machines can reach (`tcp/0.0.0.0:7447`, a LAN address, a
+    /// host name) without a policy. Off (the default), [`start`] refuses that with
+    /// [`CentralError::Insecure`]: an open central admits any process that finds it.
+    pub insecure: bool,
 }
 
 impl StartOptions {
@@ -283,6 +287,13 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
         .listen
         .iter()
         .partition(|e| LocalEndpoint::is_local(e));
+    if options.config.policy.is_none() && !options.insecure {
+        for e in &zenoh_endpoints {
+            if let tca_link::zenoh::Exposure::Network(reason) = tca_link::zenoh::exposure(e) {
+                return Err(CentralError::Insecure(reason));
+            }
+        }
+    }
     let mut local = Vec::new();
     if !local_endpoints.is_empty() {
         let peers = PeerPolicy::same_user_and(options.config.local_peer_uids.iter().copied())?;

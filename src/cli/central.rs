@@ -62,6 +62,10 @@ pub(crate) struct CentralArgs {
     /// from modules until the writer is back under half.
     #[arg(long, default_value_t = CentralConfig::default().max_log_backlog)]
     max_log_backlog: u32,
+    /// Listen on endpoints other machines can reach (tcp/0.0.0.0:7447, a LAN address) with
+    /// no --policy. Without it central refuses to: an open central admits anyone who finds it.
+    #[arg(long)]
+    insecure: bool,
     /// Keep the system's simulated clock: release messages in simulated-time order (for
     /// simulations such as the walking system; a real robot's system runs on the wall clock).
     #[arg(long)]
@@ -94,6 +98,7 @@ pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
         },
         log: args.log.clone(),
         listen: args.listen.clone(),
+        insecure: args.insecure,
     };
     if let Some(log) = &args.log
         && let Some(kept) = tca_logs::set_aside(log).context("cannot keep the previous log")?

@@ -14,17 +14,20 @@
 //! cannot open a session at all. Modules log in with a [`ZenohLogin`].
 //!
 //! - [`keys`]: the key scheme and liveliness tokens, and how clients retry.
+//! - [`exposure`]: whether an endpoint is reachable from other machines.
 //! - [`config`]: router and client configuration, the zenoh login, the users file.
 //! - [`client`]: [`ZenohTransport`], a module's side.
 
 pub mod client;
 pub mod config;
+pub mod exposure;
 pub mod keys;
 
 pub use client::ZenohTransport;
 pub use config::{
     ZenohLogin, client_config, client_config_with_login, router_config, router_config_with_users,
 };
+pub use exposure::{Exposure, exposure};
 pub use keys::{
     ALIVE_KEY_PATTERN, CENTRAL_ALIVE_KEY, DEFAULT_ENDPOINT, RETRY_PERIOD_INIT_MS,
     RETRY_PERIOD_MAX_MS, UP_KEY_PATTERN, alive_key, down_key, up_key, zid_of,

@@ -153,6 +153,7 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
             simulated_time: true,
             ..tca_central::CentralConfig::default()
         },
+        ..StartOptions::default()
     })
     .await
     .context("cannot start central")?;

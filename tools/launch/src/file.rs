@@ -10,6 +10,7 @@
 //! log = "out/traffic.mcap"          # optional traffic log
 //! policy = "policy.toml"            # optional: who may connect and what they may do
 //! simulated_time = true             # optional: central keeps the simulated clock
+//! insecure = true                   # optional: allow a network endpoint with no policy
 //!
 //! [[module]]
 //! name = "echo"                     # a built-in module: runs `tca module echo --connect ...`
@@ -57,6 +58,10 @@ pub struct CentralSection {
     /// Keep the system's simulated clock, as `tca central --simulated-time`.
     #[serde(default)]
     pub simulated_time: bool,
+    /// Listen on endpoints other machines can reach with no policy, as
+    /// `tca central --insecure`; refused otherwise.
+    #[serde(default)]
+    pub insecure: bool,
 }
 
 impl Default for CentralSection {
@@ -67,6 +72,7 @@ impl Default for CentralSection {
             log: None,
             policy: None,
             simulated_time: false,
+            insecure: false,
         }
     }
 }

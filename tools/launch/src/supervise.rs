@@ -92,6 +92,7 @@ pub async fn up(launch: &Launch, exe: &Path) -> Result<Up, LaunchError> {
     let central = tca_central::start(StartOptions {
         log: launch.central.log.clone(),
         listen: listen.clone(),
+        insecure: launch.central.insecure,
         config: CentralConfig {
             policy,
             simulated_time: launch.central.simulated_time,

@@ -149,6 +149,7 @@ pub async fn run(options: &LoadOptions, log_dir: &Path) -> anyhow::Result<LoadRe
             TransportKind::InProcess => vec![],
             TransportKind::Zenoh | TransportKind::Local => vec![endpoint.clone()],
         },
+        ..StartOptions::default()
     })
     .await
     .context("central did not start")?;
