@@ -4,7 +4,8 @@
 //! start pose on flat ground and a goal point. Five courses are at the Ambler's scale (about
 //! 28 x 14 m, 0.1 m cells, start (3, 0) facing +X, goal (23, 0)): `boulders`, `ditch`,
 //! `slope`, `flat` and `rough`; two at the small hexapod's scale (about 3.5 x 1.5 m, 0.02 m
-//! cells, start (0.3, 0) facing +X, goal (3.2, 0)): `hexapod-rough` and `hexapod-flat`.
+//! cells, start (0.3, 0) facing +X, goal (3.2, 0)): `hexapod-rough` and `hexapod-flat`; and `hexapod-walls` (5 x 3 m, start (0.5, 0), goal
+//! (4.5, 0)), the mixed terrain with walls of Belter and Skrzypczyński's planning experiments.
 //! `COURSES.md` next to this crate describes each one.
 //!
 //! Every course is a pure function of its name and seed: the same pair always gives the
@@ -26,6 +27,7 @@ mod ambler;
 mod error;
 mod hexapod;
 mod relief;
+pub mod walls;
 
 #[cfg(test)]
 mod tests;
@@ -48,6 +50,7 @@ pub const NAMES: &[&str] = &[
     "rough",
     "hexapod-rough",
     "hexapod-flat",
+    "hexapod-walls",
 ];
 
 /// Where and which way a robot starts on a course (world frame).
@@ -95,11 +98,14 @@ pub enum Course {
     HexapodRough,
     /// Level ground (hexapod).
     HexapodFlat,
+    /// Mixed terrain with a climbable 15 cm wall, an unclimbable 35 cm one and a steep
+    /// hill to go round (hexapod, 5 x 3 m).
+    HexapodWalls,
 }
 
 impl Course {
     /// Every built-in course, in the order of [`NAMES`].
-    pub const ALL: [Course; 7] = [
+    pub const ALL: [Course; 8] = [
         Course::Boulders,
         Course::Ditch,
         Course::Slope,
@@ -107,6 +113,7 @@ impl Course {
         Course::Rough,
         Course::HexapodRough,
         Course::HexapodFlat,
+        Course::HexapodWalls,
     ];
 
     /// The course called `name` (one of [`NAMES`]).
@@ -142,11 +149,13 @@ impl Course {
             Course::Rough => ambler::rough(seed)?,
             Course::HexapodRough => hexapod::rough(seed)?,
             Course::HexapodFlat => hexapod::flat()?,
+            Course::HexapodWalls => walls::walls(seed)?,
         };
         let (start, goal, robot_hint) = match self {
             Course::HexapodRough | Course::HexapodFlat => {
                 (hexapod::START, hexapod::GOAL, "hexapod")
             }
+            Course::HexapodWalls => (walls::START, walls::GOAL, "hexapod"),
             _ => (ambler::START, ambler::GOAL, "ambler"),
         };
         Ok(LeggedCourse {
