@@ -171,6 +171,12 @@ pub fn terrain_collision(
     clearance: f64,
 ) -> Option<String> {
     for (probe, pose) in robot.probes.iter().zip(poses) {
+        // The whole shape well above the highest ground under it needs no closer look.
+        let c = pose.translation.vector;
+        let reach = probe.bounding_radius;
+        if c.z - reach - clearance > terrain.max_in_disc(Point2::new(c.x, c.y), reach) {
+            continue;
+        }
         for (pt, r) in &probe.points {
             let w = pose * pt;
             let ground = terrain.max_in_disc(Point2::new(w.x, w.y), *r);

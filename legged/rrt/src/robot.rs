@@ -20,6 +20,8 @@ pub(crate) struct ShapeProbe {
     pub capsule: (Point3<f64>, Point3<f64>, f64),
     /// Points over the shape and the radius each stands for (shape frame).
     pub points: Vec<(Point3<f64>, f64)>,
+    /// The radius of the ball about the shape's centre that holds it.
+    pub bounding_radius: f64,
 }
 
 /// The robot model prepared for planning.
@@ -100,6 +102,7 @@ impl Robot {
                 link: s.link.to_owned(),
                 capsule: capsule_of(&s.shape),
                 points: surface_points(&s.shape, 0.01),
+                bounding_radius: s.shape.bounding_radius(),
             });
         }
         if !lo.x.is_finite() {

@@ -16,7 +16,14 @@ pub struct Terrain {
     single: Vec<f64>,
     /// The sum of `single` over each cell's 3 x 3 neighbourhood.
     summed: Vec<f64>,
+    /// The highest sample of each block of `BLOCK` x `BLOCK` samples, row-major.
+    block_max: Vec<f64>,
+    /// Blocks along X.
+    blocks_x: usize,
 }
+
+/// Samples along each side of a block of the coarse maximum grid.
+const BLOCK: usize = 4;
 
 impl Terrain {
     /// The terrain of a height field for a foot of `foot_radius_m`: every cell's footfall
@@ -49,10 +56,21 @@ impl Terrain {
                 summed[iy * nx + ix] = s;
             }
         }
+        let heights = view.terrain().grid().cells();
+        let (bx, by) = (nx.div_ceil(BLOCK), ny.div_ceil(BLOCK));
+        let mut block_max = vec![f64::NEG_INFINITY; bx * by];
+        for iy in 0..ny {
+            for ix in 0..nx {
+                let b = &mut block_max[(iy / BLOCK) * bx + ix / BLOCK];
+                *b = b.max(heights[iy * nx + ix]);
+            }
+        }
         Terrain {
             view,
             single,
             summed,
+            block_max,
+            blocks_x: bx,
         }
     }
 
@@ -87,9 +105,42 @@ impl Terrain {
         self.height_field().height_at(p.x, p.y)
     }
 
-    /// The highest ground within a disc, metres.
+    /// The highest ground within a disc, metres, or a little more: the highest sample of
+    /// the cells that the disc's bounding square touches (the surface is bilinear between
+    /// samples, so it never rises above them); for discs wider than two cells, the highest
+    /// of the coarse blocks of samples the square touches. Edge-clamped outside the map.
     pub fn max_in_disc(&self, c: Point2<f64>, r: f64) -> f64 {
-        self.height_field().max_height_in_disc(c, r)
+        let grid = self.height_field().grid();
+        let res = grid.resolution_m();
+        let r = if r.is_finite() { r.max(0.0) } else { 0.0 };
+        if r == 0.0 {
+            return self.height(c);
+        }
+        let (gx, gy) = grid.world_to_grid(c);
+        let (nx, ny) = (grid.nx(), grid.ny());
+        let span = |g: f64, n: usize| {
+            let lo = (g - r / res).floor().clamp(0.0, (n - 1) as f64) as usize;
+            let hi = (g + r / res).ceil().clamp(0.0, (n - 1) as f64) as usize;
+            (lo, hi)
+        };
+        let (x0, x1) = span(gx, nx);
+        let (y0, y1) = span(gy, ny);
+        let mut best = f64::NEG_INFINITY;
+        if r <= 2.0 * res {
+            let h = grid.cells();
+            for iy in y0..=y1 {
+                for &v in &h[iy * nx + x0..=iy * nx + x1] {
+                    best = best.max(v);
+                }
+            }
+        } else {
+            for by in y0 / BLOCK..=y1 / BLOCK {
+                for bx in x0 / BLOCK..=x1 / BLOCK {
+                    best = best.max(self.block_max[by * self.blocks_x + bx]);
+                }
+            }
+        }
+        best
     }
 
     /// The 3 x 3 summed foothold quality of the cell containing `p` (lower is better);
@@ -221,6 +272,19 @@ mod tests {
         assert!(t.foothold_quality(Point2::new(0.62, 0.4)).is_infinite());
         assert_eq!(t.foothold_quality(Point2::new(0.9, 0.4)), 0.0);
         assert!(t.foothold_quality(Point2::new(5.0, 0.4)).is_infinite());
+    }
+
+    proptest! {
+        #[test]
+        fn max_in_disc_is_never_below_the_ground_in_the_disc(x in 0.0..1.2f64, y in 0.0..0.8f64, r in 0.0..0.2f64, a in 0.0..6.3f64, s in 0.0..1.0f64) {
+            let t = Terrain::new(field(|x, y| (7.0 * x).sin() * 0.05 + (5.0 * y).cos() * 0.03 + if x > 0.6 { 0.1 } else { 0.0 }), 0.012);
+            let c = Point2::new(x, y);
+            let p = c + nalgebra::Vector2::new(a.cos(), a.sin()) * (r * s);
+            let m = t.max_in_disc(c, r);
+            prop_assert!(m >= t.height(p) - 1e-12);
+            // And never above the highest sample within two cells more of the disc.
+            prop_assert!(m <= t.height_field().max_height_in_disc(c, r + 0.2) + 1e-12);
+        }
     }
 
     #[test]

@@ -85,3 +85,67 @@ fn a_goal_off_the_map_is_refused() {
         .unwrap_err();
     assert!(err.to_string().contains("goal"), "{err}");
 }
+
+#[test]
+fn the_walls_course_is_crossed_over_the_low_wall_and_round_the_steep_hill() {
+    use tca_legged_courses::{Course, walls};
+    let course = Course::builtin("hexapod-walls", 1).unwrap();
+    let p = Planner::new(
+        hexapod(),
+        Arc::new(course.terrain.clone()),
+        RrtParams::default(),
+    )
+    .unwrap();
+    let start = Point2::new(course.start.x_m, course.start.y_m);
+    let plan = p.plan(start, course.start.yaw_rad, course.goal).unwrap();
+    assert!((plan.postures.last().unwrap().body.xy() - course.goal).norm() < 1e-9);
+    let (hill, hill_r, _) = walls::STEEP_HILL;
+    let hill = Point2::new(hill[0], hill[1]);
+    let mut crossed = false;
+    for (w, t) in plan.postures.windows(2).zip(&plan.transitions) {
+        let (a, b) = (w[0].body.xy(), w[1].body.xy());
+        if a.x < walls::WALL_X_M.1 && b.x >= walls::WALL_X_M.0
+            || b.x < walls::WALL_X_M.1 && a.x >= walls::WALL_X_M.0
+        {
+            assert!(
+                a.y < walls::WALL_SPLIT_Y_M && b.y < walls::WALL_SPLIT_Y_M,
+                "crosses the high wall: {a} {b}"
+            );
+            crossed = true;
+        }
+        assert!(t.min_margin_m > 0.0);
+        for phase in &t.phases {
+            for s in &phase.swings {
+                // Every swing starts on the old foothold and ends on the new one.
+                assert_eq!(s.path.first(), Some(&w[0].feet[s.leg]));
+                assert_eq!(s.path.last(), Some(&w[1].feet[s.leg]));
+            }
+        }
+    }
+    assert!(crossed);
+    // Over the low wall the body rose to keep its clearance.
+    let over = plan
+        .postures
+        .iter()
+        .filter(|q| (walls::WALL_X_M.0..=walls::WALL_X_M.1).contains(&q.body.x))
+        .map(|q| q.body.z)
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        over >= walls::LOW_WALL_M + p.params().body_clearance_m,
+        "{over}"
+    );
+    for q in &plan.postures {
+        assert!(
+            (q.body.xy() - hill).norm() > hill_r * 0.75,
+            "over the steep hill at {}",
+            q.body.xy()
+        );
+        for f in &q.feet {
+            assert!(
+                p.terrain()
+                    .foothold_quality(Point2::new(f.x, f.y))
+                    .is_finite()
+            );
+        }
+    }
+}
