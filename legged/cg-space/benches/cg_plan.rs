@@ -1,0 +1,81 @@
+//! A route and its footfalls for the Ambler across a 40 x 40 m map (CG-space built lazily
+//! from nothing each time, the robot's tables built once), against one inverse-kinematics
+//! solve in the same run.
+
+use std::hint::black_box;
+use std::sync::Arc;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use nalgebra::Point2;
+use tca_cg_space::{CgParams, CgRobot, CgSpace, FootStep, PlanParams, plan};
+use tca_legged_model::{IkOptions, RobotModel};
+use tca_robot::HeightField;
+
+/// 40 x 40 m of rolling ground with scattered steep rocks and one wall to go round.
+fn terrain() -> HeightField {
+    let res = 0.1;
+    let n = 401;
+    let mut h = Vec::with_capacity(n * n);
+    for iy in 0..n {
+        for ix in 0..n {
+            let (x, y) = (ix as f64 * res, iy as f64 * res);
+            let mut z = 0.3 * (x / 3.0).sin() * (y / 4.0).cos();
+            let rock = ((x * 0.7).sin() * (y * 0.9).cos()).abs() > 0.995;
+            if rock {
+                z += 0.5;
+            }
+            if (19.0..20.0).contains(&x) && (5.0..30.0).contains(&y) {
+                z = 4.0;
+            }
+            h.push(z);
+        }
+    }
+    HeightField::new(Point2::new(0.0, 0.0), res, n, n, h).expect("a terrain")
+}
+
+fn bench(c: &mut Criterion) {
+    let model = RobotModel::builtin("ambler").expect("the Ambler");
+    let t = terrain();
+    let robot = Arc::new(CgRobot::new(&model, 0.1, CgParams::default()).expect("tables"));
+    let params = PlanParams::default();
+    let run = || {
+        let mut space = CgSpace::new(robot.clone(), &t).expect("a space");
+        plan(
+            &mut space,
+            (Point2::new(4.0, 20.0), 0.0),
+            (Point2::new(36.0, 20.0), 0.0),
+            None,
+            &params,
+        )
+        .expect("a plan")
+    };
+    let p = run();
+    let advances = p
+        .feet
+        .steps
+        .iter()
+        .filter(|s| matches!(s, FootStep::Advance { .. }))
+        .count();
+    eprintln!(
+        "Ambler 40 x 40 m: route {} cells, {} foot moves, {} replans, {} routes",
+        p.feet.route.len(),
+        p.feet.steps.len() - advances,
+        p.marked.len(),
+        p.routes
+    );
+    let mut group = c.benchmark_group("cg_plan");
+    group.sample_size(10);
+    group.bench_function("ambler_40x40_route_and_footfalls", |b| {
+        b.iter(|| black_box(run()))
+    });
+    let leg = model.leg("left_front").expect("a leg");
+    let target =
+        leg.foot_position(&leg.neutral()).expect("a foot") + nalgebra::Vector3::new(0.2, 0.1, -0.3);
+    group.bench_function("baseline_one_ik_solve", |b| {
+        b.iter(|| black_box(leg.inverse_kinematics(&target, &IkOptions::default())))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,190 @@
+//! Route and footfalls together, with the foot-level search's feedback to the route
+//! planner: a CG cell the search cannot get past is marked invalid and the route replanned,
+//! the footfalls planned so far along the route's unchanged beginning kept.
+
+use nalgebra::Point2;
+use serde::{Deserialize, Serialize};
+
+use crate::error::CgError;
+use crate::footplan::{FootCell, FootPlan, FootSearch, FootStep, SearchParams, Stance, apply};
+use crate::grid::CgCell;
+use crate::route::{Route, RouteParams, plan_route};
+use crate::space::CgSpace;
+
+/// Everything the planner is given besides the space.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PlanParams {
+    /// Route planning.
+    pub route: RouteParams,
+    /// The foot-level search.
+    pub search: SearchParams,
+    /// Routes replanned after the search failed before the planner gives up.
+    pub max_replans: usize,
+}
+
+impl Default for PlanParams {
+    fn default() -> Self {
+        PlanParams {
+            route: RouteParams::default(),
+            search: SearchParams::default(),
+            max_replans: 30,
+        }
+    }
+}
+
+/// A planned walk: the route and the foot moves along it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Plan {
+    /// The final route (its cells) and the foot moves.
+    pub feet: FootPlan,
+    /// The first route's statistics.
+    pub first_route: Route,
+    /// Cells marked invalid by the feedback, in order.
+    pub marked: Vec<CgCell>,
+    /// Routes planned in all.
+    pub routes: usize,
+}
+
+/// Plans from a start pose to a goal pose. `feet` is where each foot stands at the start
+/// (world X, Y; `None` for a foot in the air); without it, a stance is chosen.
+pub fn plan(
+    space: &mut CgSpace,
+    start: (Point2<f64>, f64),
+    goal: (Point2<f64>, f64),
+    feet: Option<&[Option<Point2<f64>>]>,
+    params: &PlanParams,
+) -> Result<Plan, CgError> {
+    let grid = *space.grid();
+    let cell = |what: &'static str, p: Point2<f64>, theta: f64| {
+        grid.cell_of(p, theta).ok_or_else(|| {
+            let (lo, hi) = (grid.origin, grid.centre(grid.nx - 1, grid.ny - 1));
+            CgError::OutsideMap {
+                what,
+                x: p.x,
+                y: p.y,
+                x_min: lo.x,
+                x_max: hi.x + grid.cell_m / 2.0,
+                y_min: lo.y,
+                y_max: hi.y + grid.cell_m / 2.0,
+            }
+        })
+    };
+    let s = cell("the start", start.0, start.1)?;
+    let g = cell("the goal", goal.0, goal.1)?;
+    let first_route = plan_route(space, s, g, &params.route)?;
+    let mut route = first_route.cells.clone();
+    let mut marked = Vec::new();
+    let mut routes = 1;
+    // The steps kept from the last search, and the stance they lead to.
+    let mut kept: Vec<FootStep> = Vec::new();
+    let mut stance: Option<Stance> = feet.map(|f| Stance {
+        k: 0,
+        feet: f
+            .iter()
+            .map(|p| p.map(|p| grid.xy_of(p)))
+            .collect::<Vec<Option<FootCell>>>(),
+    });
+    let initial = stance.clone();
+    loop {
+        let search = FootSearch::new(space, &route, params.search.clone());
+        let from = match &stance {
+            Some(s) => s.clone(),
+            None => search
+                .initial_stance()
+                .ok_or_else(|| CgError::NoFootfalls {
+                    replans: marked.len(),
+                    detail: "no stance at the start holds the CG".into(),
+                })?,
+        };
+        let start_stance = initial.clone().unwrap_or_else(|| {
+            if kept.is_empty() {
+                from.clone()
+            } else {
+                stance.clone().unwrap_or_else(|| from.clone())
+            }
+        });
+        match search.search(from.clone()) {
+            Ok(mut found) => {
+                let mut steps = kept.clone();
+                steps.append(&mut found.steps);
+                let start_stance = if kept.is_empty() { from } else { start_stance };
+                let initial_stance = initial.clone().unwrap_or(start_stance);
+                return Ok(Plan {
+                    feet: FootPlan {
+                        route,
+                        start: Stance {
+                            k: 0,
+                            feet: initial_stance.feet,
+                        },
+                        steps,
+                        nodes: found.nodes,
+                    },
+                    first_route,
+                    marked,
+                    routes,
+                });
+            }
+            Err(fail) => {
+                if marked.len() >= params.max_replans {
+                    return Err(CgError::NoFootfalls {
+                        replans: marked.len(),
+                        detail: format!(
+                            "the search got no further than route cell {} of {}",
+                            fail.furthest,
+                            route.len()
+                        ),
+                    });
+                }
+                let Some(&bad) = route.get(fail.furthest + 1) else {
+                    return Err(CgError::NoFootfalls {
+                        replans: marked.len(),
+                        detail: "the search failed at the goal".into(),
+                    });
+                };
+                if bad == g {
+                    return Err(CgError::NoFootfalls {
+                        replans: marked.len(),
+                        detail: "the goal cell itself cannot be stepped into".into(),
+                    });
+                }
+                tracing::debug!(
+                    ?bad,
+                    furthest = fail.furthest,
+                    "foot search stuck; cell marked invalid"
+                );
+                space.mark_invalid(bad);
+                marked.push(bad);
+                // Keep the steps up to the stance that reached the furthest cell, and plan
+                // the rest of the route from there.
+                let mut reached = from.clone();
+                let mut prefix = Vec::new();
+                for st in &fail.steps_to_furthest {
+                    apply(&mut reached, st);
+                    prefix.push(*st);
+                }
+                let here = route[fail.furthest];
+                let rest = plan_route(space, here, g, &params.route);
+                routes += 1;
+                match rest {
+                    Ok(r) => {
+                        let mut new_route: Vec<CgCell> = route[..fail.furthest].to_vec();
+                        new_route.extend(r.cells);
+                        kept.extend(prefix);
+                        reached.k = fail.furthest;
+                        stance = Some(reached);
+                        route = new_route;
+                    }
+                    Err(CgError::Unreachable { .. }) | Err(CgError::InvalidEndpoint { .. }) => {
+                        // From here there is no way on: replan from the start.
+                        let r = plan_route(space, s, g, &params.route)?;
+                        routes += 1;
+                        route = r.cells;
+                        kept.clear();
+                        stance = initial.clone();
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,108 @@
+//! The CG-cell tests: the quadrant test and the vertical-reach test.
+
+use serde::{Deserialize, Serialize};
+
+use crate::footmap::FootMap;
+use crate::grid::{CgCell, CgGrid};
+use crate::robot::{CgRobot, HeadingTable};
+
+/// Why a CG cell is valid or not.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Verdict {
+    /// Valid: the body can stand at heights `lo..hi` (world Z of the body origin, metres).
+    Valid {
+        /// Lowest body height (the under-carriage's clearance).
+        lo: f64,
+        /// A body height at which every quadrant holds a reachable foot cell.
+        at: f64,
+    },
+    /// The body's footprint leaves the map.
+    OffMap,
+    /// Quadrant `0..4` (front-left, rear-left, rear-right, front-right) holds no valid foot
+    /// cell in any leg's range.
+    EmptyQuadrant(u8),
+    /// Every quadrant holds a valid foot cell, but no body height lets one foot per
+    /// quadrant reach the ground with the under-carriage clear of it.
+    NoHeight,
+    /// Marked invalid from outside (the foot-level search found it impassable).
+    Marked,
+}
+
+impl Verdict {
+    /// Whether the cell is valid.
+    pub fn is_valid(&self) -> bool {
+        matches!(self, Verdict::Valid { .. })
+    }
+}
+
+/// The lowest the body origin may stand over a CG cell so that its under-carriage clears
+/// the ground by the clearance: `max(land + depth)`; `None` if part of it is off the map.
+pub fn min_body_height(
+    robot: &CgRobot,
+    table: &HeadingTable,
+    foot: &FootMap,
+    ix: i32,
+    iy: i32,
+) -> Option<f64> {
+    let mut h = f64::NEG_INFINITY;
+    for u in &table.under {
+        let land = foot.height(ix + u.di, iy + u.dj)?;
+        h = h.max(land + u.depth);
+    }
+    Some(h + robot.params.clearance_m)
+}
+
+/// The body-height interval (world Z of the body origin) over which a foot of radius
+/// `radius` on ground `ground` keeps its contact centre within `z_lo..z_hi` (body z).
+pub fn foot_interval(ground: f64, radius: f64, z_lo: f64, z_hi: f64) -> (f64, f64) {
+    (ground + radius - z_hi, ground + radius - z_lo)
+}
+
+/// Tests one CG cell: the quadrant test and the vertical-reach test.
+pub fn assess(robot: &CgRobot, grid: &CgGrid, foot: &FootMap, cell: CgCell) -> Verdict {
+    if !grid.contains(cell) {
+        return Verdict::OffMap;
+    }
+    let table = &robot.headings[usize::from(cell.it)];
+    let Some(min_h) = min_body_height(robot, table, foot, cell.ix, cell.iy) else {
+        return Verdict::OffMap;
+    };
+    // Body-height intervals offered by each quadrant's reachable valid foot cells.
+    let mut events: Vec<(f64, i8, u8)> = Vec::new();
+    let mut seen = [false; 4];
+    for (leg, cells) in table.legs.iter().enumerate() {
+        let r = robot.foot_radius[leg];
+        for c in cells {
+            if c.quadrant > 3 {
+                continue;
+            }
+            let (fx, fy) = (cell.ix + c.di, cell.iy + c.dj);
+            if !foot.valid(fx, fy) {
+                continue;
+            }
+            let Some(g) = foot.height(fx, fy) else {
+                continue;
+            };
+            seen[usize::from(c.quadrant)] = true;
+            let (lo, hi) = foot_interval(g, r, c.z_lo, c.z_hi);
+            let lo = lo.max(min_h);
+            if lo <= hi {
+                events.push((lo, 1, c.quadrant));
+                events.push((hi, -1, c.quadrant));
+            }
+        }
+    }
+    if let Some(q) = (0..4u8).find(|&q| !seen[usize::from(q)]) {
+        return Verdict::EmptyQuadrant(q);
+    }
+    // Sweep the heights: opening events before closing ones at the same height.
+    events.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
+    let mut open = [0i32; 4];
+    for (h, kind, q) in events {
+        open[usize::from(q)] += i32::from(kind);
+        if kind > 0 && open.iter().all(|&n| n > 0) {
+            return Verdict::Valid { lo: min_h, at: h };
+        }
+    }
+    Verdict::NoHeight
+}
