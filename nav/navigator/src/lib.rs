@@ -22,6 +22,7 @@ mod base;
 mod courses;
 mod navigator;
 mod picture;
+mod presets;
 mod run;
 mod wheeled;
 
@@ -29,5 +30,8 @@ pub use base::{Base, Motion};
 pub use courses::{Course, course_by_name, hill_course, ramps_course};
 pub use navigator::{Command, NavError, NavParams, Navigator};
 pub use picture::write_picture;
+pub use presets::{WHEELED_MOUNT, wheeled_params};
 pub use run::{RunOptions, RunReport, run, true_danger_map, true_map_path_m};
+pub use tca_nav_danger_map::DangerParams;
+pub use tca_nav_sensing::{CameraMount, Pose2};
 pub use wheeled::{WheeledBase, WheeledParams};

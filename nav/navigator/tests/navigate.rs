@@ -1,28 +1,9 @@
 //! The wheeled base finds its way around the hill (the ramps course, longer, is run by
 //! `tca navigate`).
 
-use tca_nav_danger_map::DangerParams;
 use tca_nav_navigator::{
-    Course, NavParams, RunOptions, WheeledBase, WheeledParams, hill_course, run,
+    Course, RunOptions, WheeledBase, WheeledParams, hill_course, run, wheeled_params,
 };
-use tca_nav_sensing::CameraMount;
-
-fn wheeled_params() -> NavParams {
-    let danger = DangerParams::from_toml(
-        include_str!("../../danger-map/robots/wheeled.toml"),
-        "wheeled.toml",
-    )
-    .unwrap();
-    NavParams::new(
-        danger,
-        CameraMount {
-            forward_m: 0.15,
-            height_m: 0.45,
-            pitch_down_rad: 0.55,
-        },
-        0.2,
-    )
-}
 
 fn drive(course: &Course, seed: u64) -> tca_nav_navigator::RunReport {
     let mut base = WheeledBase::new(WheeledParams::PIONEER, &course.terrain, course.start);
