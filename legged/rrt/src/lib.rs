@@ -55,3 +55,8 @@ pub use rrt::{Extension, Node, Plan, PlanStats, Planner, Tree};
 pub use terrain::Terrain;
 pub use trajectory::foot_trajectory;
 pub use traverse::{Phase, Swing, Transition, check_traverse};
+
+/// The geometry and terrain crates of this crate's interface, for users that do not
+/// depend on them themselves.
+pub use nalgebra;
+pub use tca_robot;
