@@ -1,0 +1,32 @@
+//! Foxglove for tca: a live view of a running system over the Foxglove WebSocket protocol
+//! and MCAP files of recorded walks, both through Foxglove's own SDK crate.
+//!
+//! Every message name is a channel whose JSON schema is derived from its registered format
+//! ([`schema`], [`traffic`]); the walking systems' traffic also becomes Foxglove's well-known
+//! messages ([`wellknown`]): terrain maps as `foxglove.Grid`, the robot's frames as
+//! `foxglove.FrameTransforms` (with its URDF on a topic for the 3D panel), planned leg paths,
+//! footholds and the support polygon as `foxglove.SceneUpdate`, range images as
+//! `foxglove.RawImage`, walk progress and problems as `foxglove.Log`.
+//!
+//! # Layout
+//!
+//! - [`schema`]: JSON schemas from data formats.
+//! - [`traffic`]: topics, schemas and JSON of the traffic channels.
+//! - [`wellknown`]: [`WellKnownState`], traffic to well-known messages.
+//! - [`geometry`]: nalgebra to Foxglove geometry.
+//! - [`export`]: [`export_foxglove`], a log to MCAP.
+//! - [`live`]: [`LiveView`], the WebSocket server.
+//! - [`error`][]: [`FoxgloveError`].
+
+pub mod error;
+pub mod export;
+pub mod geometry;
+pub mod live;
+pub mod schema;
+pub mod traffic;
+pub mod wellknown;
+
+pub use error::{FoxgloveError, Result};
+pub use export::{ExportSummary, export_foxglove};
+pub use live::LiveView;
+pub use wellknown::{WellKnown, WellKnownState};
