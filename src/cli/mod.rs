@@ -9,6 +9,7 @@ mod log;
 mod map;
 mod module;
 mod ping;
+mod plan;
 mod registry;
 mod replay;
 mod robot;
@@ -72,6 +73,9 @@ enum Command {
     Kill(bus::kill::KillArgs),
     /// Emergency stop: kill every task tree, then send the halt.
     Stop(bus::stop::StopArgs),
+    /// Plan a multi-legged robot's walk without walking it.
+    #[command(subcommand)]
+    Plan(plan::PlanCommand),
 }
 
 /// Where to find central (shared by the commands that connect).
@@ -185,6 +189,7 @@ pub(crate) fn main() -> ExitCode {
             Command::Send(args) => bus::send::run(args).await,
             Command::Kill(args) => bus::kill::run(args).await,
             Command::Stop(args) => bus::stop::run(args).await,
+            Command::Plan(cmd) => plan::run(cmd).await,
         }
     });
     match result {
