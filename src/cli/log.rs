@@ -12,7 +12,8 @@ use tca_messages::Class;
 pub(crate) enum LogCommand {
     /// Print the traffic readably, one line per message.
     Show(ShowArgs),
-    /// Write a JSON-encoded copy of the log that Foxglove Studio opens.
+    /// Write a copy of the log for Foxglove: JSON-encoded (--json) or with schemas and
+    /// Foxglove's well-known messages (--foxglove).
     Export(ExportArgs),
     /// Print the Figure 18 breakdown (per module: computing, waiting, idle), message counts
     /// and query latencies.
@@ -38,8 +39,13 @@ pub(crate) struct ExportArgs {
     /// The log file.
     file: PathBuf,
     /// Where to write the JSON-encoded MCAP copy.
+    #[arg(long, value_name = "OUT.mcap", required_unless_present = "foxglove")]
+    json: Option<PathBuf>,
+    /// Where to write the Foxglove MCAP copy: every message name a channel with a JSON schema
+    /// from its registered format, plus Foxglove's well-known maps, frames, scene, images and
+    /// log (see docs/foxglove.md).
     #[arg(long, value_name = "OUT.mcap")]
-    json: PathBuf,
+    foxglove: Option<PathBuf>,
 }
 
 #[derive(Debug, Args)]
@@ -118,9 +124,27 @@ pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
         LogCommand::Export(args) => {
             let log = LogFile::open(&args.file)
                 .with_context(|| format!("cannot read log {}", args.file.display()))?;
-            let n = tca_logs::export_json(&log, &args.json)
-                .with_context(|| format!("cannot write {}", args.json.display()))?;
-            eprintln!("wrote {n} JSON messages to {}", args.json.display());
+            if let Some(out) = &args.json {
+                let n = tca_logs::export_json(&log, out)
+                    .with_context(|| format!("cannot write {}", out.display()))?;
+                eprintln!("wrote {n} JSON messages to {}", out.display());
+            }
+            if let Some(out) = &args.foxglove {
+                let s = tca_foxglove::export_foxglove(&log, out)?;
+                let well_known: Vec<String> = s
+                    .well_known
+                    .iter()
+                    .map(|(t, n)| format!("{t} {n}"))
+                    .collect();
+                eprintln!(
+                    "wrote {} messages to {} ({} traffic, {} left out undecoded; well-known: {})",
+                    s.messages,
+                    out.display(),
+                    s.traffic,
+                    s.undecoded,
+                    well_known.join(", ")
+                );
+            }
             Ok(ExitCode::SUCCESS)
         }
         LogCommand::Stats(args) => {

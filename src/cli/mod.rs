@@ -4,6 +4,7 @@ mod bus;
 mod central;
 mod chaos;
 mod course;
+mod foxglove;
 mod legged_walk;
 mod log;
 mod map;
@@ -73,6 +74,9 @@ enum Command {
     Kill(bus::kill::KillArgs),
     /// Emergency stop: kill every task tree, then send the halt.
     Stop(bus::stop::StopArgs),
+    /// Serve a live view of a running system to Foxglove (its WebSocket protocol): every
+    /// message name, maps, frames, the robot, its plan, images and a log.
+    Foxglove(foxglove::FoxgloveArgs),
     /// Plan a multi-legged robot's walk without walking it.
     #[command(subcommand)]
     Plan(plan::PlanCommand),
@@ -189,6 +193,7 @@ pub(crate) fn main() -> ExitCode {
             Command::Send(args) => bus::send::run(args).await,
             Command::Kill(args) => bus::kill::run(args).await,
             Command::Stop(args) => bus::stop::run(args).await,
+            Command::Foxglove(args) => foxglove::run(args).await,
             Command::Plan(cmd) => plan::run(cmd).await,
         }
     });
