@@ -1,5 +1,5 @@
 //! The planner's speed: foothold selection for one leg and a whole plan across the
-//! hexapod's rough course, against a baseline measured in the same run (one inverse
+//! hexapod's walls course, against a baseline measured in the same run (one inverse
 //! kinematics solution of the same leg, the unit of work a foothold choice repeats).
 
 use std::sync::Arc;
@@ -12,7 +12,7 @@ use tca_rrt::{Planner, RrtParams, select_foothold};
 
 fn bench(c: &mut Criterion) {
     let model = Arc::new(RobotModel::builtin("hexapod").expect("the hexapod is built in"));
-    let course = Course::builtin("hexapod-rough", 1).expect("the course is built in");
+    let course = Course::builtin("hexapod-walls", 1).expect("the course is built in");
     let terrain = Arc::new(course.terrain.clone());
     let planner = Planner::new(model.clone(), terrain, RrtParams::default()).expect("planner");
     let robot = planner.robot();
@@ -40,7 +40,7 @@ fn bench(c: &mut Criterion) {
     });
     let mut group = c.benchmark_group("plan");
     group.sample_size(10);
-    group.bench_function("hexapod-rough, start to goal", |b| {
+    group.bench_function("hexapod-walls, start to goal", |b| {
         b.iter(|| {
             planner
                 .plan(
@@ -49,6 +49,7 @@ fn bench(c: &mut Criterion) {
                     course.goal,
                 )
                 .map(|p| p.postures.len())
+                .expect("hexapod-walls (seed 1) is planned")
         })
     });
     group.finish();
