@@ -135,3 +135,66 @@ fn killing_every_tree_starts_none_of_the_waiting_tasks() {
     assert_eq!(ends, 2);
     assert_eq!(h.central.live_nodes(), 0);
 }
+
+#[test]
+fn the_trees_a_module_started_are_killed_when_it_says_goodbye() {
+    let mut h = Harness::new();
+    h.connect(1, "walker", 1);
+    h.connect(2, "ctl", 1);
+    h.connect(3, "other", 1);
+    h.register::<Target>(2, "ctl", "bodyMove", Class::Command, false);
+    let (_walk, _) = task(&mut h, 1, "walker", Class::Command, "bodyMove", None, true);
+    let (kept, _) = task(&mut h, 3, "other", Class::Command, "bodyMove", None, true);
+    assert_eq!(h.central.live_nodes(), 2);
+    let sent = control_msg(&mut h, 1, "walker", names::BYE, &());
+    assert!(
+        sent.iter()
+            .any(|(l, e)| *l == 2 && e.name.as_str() == names::CANCEL),
+        "the running handler is told to stop: {sent:?}"
+    );
+    assert_eq!(
+        h.central.live_nodes(),
+        1,
+        "only the walker's tree is killed"
+    );
+    // The other module's command, waiting behind it, now runs.
+    assert!(
+        sent.iter().any(|(l, e)| *l == 2 && e.id == kept.id),
+        "{sent:?}"
+    );
+}
+
+#[test]
+fn the_trees_of_a_module_that_stays_gone_are_killed_after_max_wait() {
+    let mut h = Harness::new();
+    h.connect(1, "walker", 1);
+    h.connect(2, "ctl", 1);
+    h.register::<Target>(2, "ctl", "bodyMove", Class::Command, false);
+    task(&mut h, 1, "walker", Class::Command, "bodyMove", None, true);
+    // It crashes and comes back in time: its tree lives on.
+    h.step(Event::Closed(1));
+    h.now += 100 * MS;
+    h.connect(4, "walker", 1);
+    h.now += 1_000 * MS;
+    h.step(Event::Tick);
+    assert_eq!(h.central.live_nodes(), 1);
+    // It crashes for good: at max wait (500 ms here) its tree is killed.
+    h.step(Event::Closed(4));
+    let deadline = h
+        .central
+        .next_deadline()
+        .expect("a deadline for the orphans");
+    assert_eq!(deadline, h.now + 500 * MS);
+    h.now += 499 * MS;
+    h.step(Event::Tick);
+    assert_eq!(h.central.live_nodes(), 1, "not before max wait");
+    h.now += MS;
+    let sent = h.step(Event::Tick);
+    assert_eq!(h.central.live_nodes(), 0);
+    assert!(
+        sent.iter()
+            .any(|(l, e)| *l == 2 && e.name.as_str() == names::CANCEL),
+        "the handler is told to stop: {sent:?}"
+    );
+    assert!(h.central.next_deadline().is_none());
+}

@@ -220,8 +220,15 @@ pub async fn walk(
             },
             [],
         )?;
-        let outcome = tokio::time::timeout(WALK_TIMEOUT, task.outcome())
+        let outcome = walker
+            .unless_interrupted(tokio::time::timeout(WALK_TIMEOUT, task.outcome()))
             .await
+            .ok_or_else(|| {
+                anyhow::anyhow!(
+                    "interrupted: the walk is stopped (the walker left); the leg stands where \
+                     it stopped"
+                )
+            })?
             .map_err(|_| anyhow::anyhow!("the walk did not end within {WALK_TIMEOUT:?}"))?
             .map_err(|e| match e {
                 tca_module::ModuleError::CentralLost => anyhow::anyhow!(

@@ -162,6 +162,26 @@ impl Module {
         self.shared.closed_signal.send_replace(true);
     }
 
+    /// Waits for `work`, unless the user presses Ctrl-C first: then the module says goodbye
+    /// (central kills the task trees it started, so nothing it asked for goes on without
+    /// it) and `None` is returned. Meant for tools that start a task and wait for its end,
+    /// such as a walker. Once this has run, Ctrl-C no longer ends the process by itself.
+    pub async fn unless_interrupted<F: std::future::Future>(&self, work: F) -> Option<F::Output> {
+        let interrupted = async {
+            if let Err(err) = tokio::signal::ctrl_c().await {
+                tracing::warn!(%err, "cannot watch for Ctrl-C; it will end the process as usual");
+                std::future::pending::<()>().await;
+            }
+        };
+        tokio::select! {
+            done = work => Some(done),
+            () = interrupted => {
+                self.close().await;
+                None
+            }
+        }
+    }
+
     /// Drops the link to central at once, without a goodbye, and stops every running handler:
     /// what central sees when a module crashes. For testing recovery.
     pub fn abort_link(&self) {
