@@ -9,6 +9,7 @@ mod legged_walk;
 mod log;
 mod map;
 mod module;
+mod navigate;
 mod ping;
 mod plan;
 mod registry;
@@ -80,6 +81,9 @@ enum Command {
     /// Plan a multi-legged robot's walk without walking it.
     #[command(subcommand)]
     Plan(plan::PlanCommand),
+    /// Navigate toward a goal given relative to the start over terrain discovered on the way
+    /// (depth camera, drifting odometry, danger map, D* Lite).
+    Navigate(navigate::NavigateArgs),
 }
 
 /// Where to find central (shared by the commands that connect).
@@ -195,6 +199,7 @@ pub(crate) fn main() -> ExitCode {
             Command::Stop(args) => bus::stop::run(args).await,
             Command::Foxglove(args) => foxglove::run(args).await,
             Command::Plan(cmd) => plan::run(cmd).await,
+            Command::Navigate(args) => navigate::run_navigate(args).await,
         }
     });
     match result {

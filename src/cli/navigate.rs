@@ -1,0 +1,198 @@
+//! `tca navigate`: stereo-camera navigation on rough terrain toward a goal given relative
+//! to the start, in simulation (depth camera, drifting odometry, the true terrain).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{Context as _, bail};
+use clap::Args;
+use serde_json::json;
+use tca_nav_navigator::{
+    Course, DangerParams, Pose2, RunOptions, RunReport, WheeledBase, WheeledParams, course_by_name,
+    run, wheeled_params, write_picture,
+};
+use tca_robot::terrain::asc::{NoData, read_height_field};
+
+#[derive(Debug, Args)]
+pub(crate) struct NavigateArgs {
+    /// The robot: `wheeled` (differential drive). `hexapod` and URDF files are not yet
+    /// driven by the navigator.
+    #[arg(long, default_value = "wheeled")]
+    robot: String,
+    /// The terrain: an .asc file, or a built-in course (`ramps`, `hill`).
+    #[arg(long)]
+    terrain: String,
+    /// Start pose X,Y[,YAW] in metres and radians (the built-in course's by default).
+    #[arg(long, value_name = "X,Y[,YAW]")]
+    start: Option<String>,
+    /// Goal DX,DY: metres east and north of the start (the built-in course's by default).
+    #[arg(long, value_name = "DX,DY")]
+    goal: Option<String>,
+    /// Odometry drift, percent of the distance travelled.
+    #[arg(long, default_value_t = 1.25)]
+    drift: f64,
+    /// Seed of the camera's and the odometry's noise.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Run this many seeds (seed, seed + 1, ...) and print a summary too.
+    #[arg(long, default_value_t = 1)]
+    seeds: u64,
+    /// Danger parameters file (TOML) instead of the robot's own.
+    #[arg(long)]
+    danger: Option<PathBuf>,
+    /// Frames before giving up.
+    #[arg(long, default_value_t = 3000)]
+    max_frames: usize,
+    /// Write a picture of the perceived danger map with the planned, estimated and true
+    /// paths to this PNG (with several seeds: one file per seed, `-SEED` before `.png`).
+    #[arg(long)]
+    picture: Option<PathBuf>,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+fn numbers(text: &str, what: &str, min: usize, max: usize) -> anyhow::Result<Vec<f64>> {
+    let v: Result<Vec<f64>, _> = text.split(',').map(|s| s.trim().parse::<f64>()).collect();
+    match v {
+        Ok(v) if (min..=max).contains(&v.len()) && v.iter().all(|x| x.is_finite()) => Ok(v),
+        _ => {
+            bail!("--{what} `{text}` is not valid; give {min} to {max} numbers separated by commas")
+        }
+    }
+}
+
+fn course(args: &NavigateArgs) -> anyhow::Result<Course> {
+    let mut course = match course_by_name(&args.terrain) {
+        Some(c) => c.context("build the course")?,
+        None => {
+            let terrain =
+                read_height_field(&args.terrain, NoData::FillLowest).with_context(|| {
+                    format!(
+                        "read the terrain {} (give an .asc file or `ramps`/`hill`)",
+                        args.terrain
+                    )
+                })?;
+            let (Some(_), Some(_)) = (&args.start, &args.goal) else {
+                bail!("--start and --goal are needed with a terrain file");
+            };
+            Course {
+                name: "file",
+                terrain,
+                start: Pose2::default(),
+                goal_offset: [0.0, 0.0],
+            }
+        }
+    };
+    if let Some(s) = &args.start {
+        let v = numbers(s, "start", 2, 3)?;
+        course.start = Pose2::new(v[0], v[1], v.get(2).copied().unwrap_or(0.0));
+    }
+    if let Some(g) = &args.goal {
+        let v = numbers(g, "goal", 2, 2)?;
+        course.goal_offset = [v[0], v[1]];
+    }
+    Ok(course)
+}
+
+pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode> {
+    match args.robot.as_str() {
+        "wheeled" => {}
+        "hexapod" => bail!(
+            "--robot hexapod: the navigator does not drive the walking hexapod yet; use --robot wheeled"
+        ),
+        other => bail!(
+            "--robot {other}: the navigator drives only the built-in wheeled base; use --robot wheeled"
+        ),
+    }
+    if !(args.drift.is_finite() && args.drift >= 0.0) {
+        bail!(
+            "--drift {} is not valid; give a percentage of at least 0",
+            args.drift
+        );
+    }
+    if args.seeds == 0 {
+        bail!("--seeds must be at least 1");
+    }
+    let course = course(&args)?;
+    let mut params = wheeled_params();
+    if let Some(path) = &args.danger {
+        params.danger = DangerParams::read(path)?;
+    }
+    let mut reports: Vec<RunReport> = Vec::new();
+    for seed in args.seed..args.seed + args.seeds {
+        let mut base = WheeledBase::new(WheeledParams::PIONEER, &course.terrain, course.start);
+        let opts = RunOptions {
+            start: course.start,
+            goal_offset: course.goal_offset,
+            drift: args.drift / 100.0,
+            seed,
+            max_frames: args.max_frames,
+        };
+        let (report, nav) = run(&course.terrain, &mut base, params.clone(), &opts)?;
+        if let Some(pic) = &args.picture {
+            let path = if args.seeds > 1 {
+                let stem = pic.with_extension("");
+                PathBuf::from(format!("{}-{seed}.png", stem.display()))
+            } else {
+                pic.clone()
+            };
+            write_picture(nav.danger(), &report, &path)
+                .with_context(|| format!("write the picture {}", path.display()))?;
+        }
+        if !args.json {
+            println!(
+                "seed {seed}: {} ({}); travelled {:.2} m (true-map path {}), final error {:.3} m ({:.1} %), estimate error {:.3} m, {} replans, {} exploration turns, {} frames at {:.1} Hz, {} collisions, {} falls, {} frames in untraversable cells",
+                if report.reached {
+                    "reached"
+                } else {
+                    "NOT reached"
+                },
+                report.reason,
+                report.distance_m,
+                report
+                    .true_map_path_m
+                    .map_or("none".into(), |m| format!("{m:.2} m")),
+                report.final_error_m,
+                100.0 * report.final_error_m / report.distance_m.max(1e-9),
+                report.estimate_error_m,
+                report.replans,
+                report.exploration_turns,
+                report.frames,
+                report.loop_hz,
+                report.collisions,
+                report.falls,
+                report.untraversable_frames,
+            );
+        }
+        reports.push(report);
+    }
+    let accepted = |r: &RunReport| {
+        r.reached
+            && r.final_error_m <= 0.03 * r.distance_m
+            && r.collisions == 0
+            && r.falls == 0
+            && r.untraversable_frames == 0
+            && r.true_map_path_m.is_some_and(|m| r.distance_m <= 1.25 * m)
+    };
+    let ok = reports.iter().filter(|r| accepted(r)).count();
+    if args.json {
+        let value = if reports.len() == 1 {
+            serde_json::to_value(&reports[0])?
+        } else {
+            json!({ "runs": reports, "accepted": ok, "of": reports.len() })
+        };
+        println!("{}", serde_json::to_string(&value)?);
+    } else if reports.len() > 1 {
+        println!(
+            "{}: {ok} of {} runs reached with final error <= 3 % of the distance, path <= 1.25 x the true-map path, no collision, fall or untraversable cell",
+            course.name,
+            reports.len()
+        );
+    }
+    Ok(if reports.iter().all(|r| r.reached) {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
