@@ -70,11 +70,11 @@ pub(crate) async fn run(command: PlanCommand) -> anyhow::Result<ExitCode> {
     }
 }
 
+/// A built-in course's start pose (x, y, yaw) and goal (x, y).
+type CourseEnds = ([f64; 3], [f64; 2]);
+
 /// The terrain and, for a built-in course, its start and goal.
-fn terrain_of(
-    name: &str,
-    seed: u64,
-) -> anyhow::Result<(HeightField, Option<([f64; 3], [f64; 2])>)> {
+fn terrain_of(name: &str, seed: u64) -> anyhow::Result<(HeightField, Option<CourseEnds>)> {
     if let Ok(course) = Course::builtin(name, seed) {
         let s = course.start;
         return Ok((

@@ -79,6 +79,7 @@ async fn start(config: CentralConfig, zenoh: bool, log: Option<&Path>) -> (Runni
         } else {
             vec![]
         },
+        insecure: false,
     })
     .await
     .unwrap();
@@ -277,6 +278,7 @@ async fn start_local(config: CentralConfig) -> (RunningCentral, String) {
         config,
         log: None,
         listen: vec![endpoint.clone()],
+        insecure: false,
     })
     .await
     .unwrap();
