@@ -112,7 +112,6 @@ impl Central {
                 state.capacity = capacity;
                 state.running = 0;
                 state.down_since = None;
-                state.orphans_pending = false;
                 state.grant = grant;
             }
             None => {
@@ -126,7 +125,6 @@ impl Central {
                         ready: VecDeque::new(),
                         waiting: VecDeque::new(),
                         down_since: None,
-                        orphans_pending: false,
                         grant,
                     },
                 );
@@ -160,18 +158,10 @@ impl Central {
         self.links.remove(&link);
     }
 
-    /// A module said goodbye: same as its link closing, but announced, so the task trees it
-    /// started are killed at once (it left on purpose; nobody waits for their outcome).
+    /// A module said goodbye: same as its link closing, but announced.
     pub(super) fn bye(&mut self, link: LinkId, out: &mut Vec<Action>) {
-        let module = self.links.get(&link).and_then(|l| l.module.clone());
         self.link_closed(link, out);
         out.push(Action::Close(link));
-        if let Some(module) = module {
-            if let Some(m) = self.modules.get_mut(&module) {
-                m.orphans_pending = false;
-            }
-            self.kill_trees_sent_by(&module, &format!("its originator {module} left"), out);
-        }
     }
 
     pub(super) fn link_closed(&mut self, link: LinkId, out: &mut Vec<Action>) {
@@ -195,7 +185,6 @@ impl Central {
             m.link = None;
             m.running = 0;
             m.down_since = Some(now);
-            m.orphans_pending = true;
             for w in m.waiting.iter_mut() {
                 w.since_ns = now;
             }

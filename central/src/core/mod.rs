@@ -159,9 +159,6 @@ struct ModuleState {
     waiting: VecDeque<Waiting>,
     /// When the module went down (None while connected).
     down_since: Option<u64>,
-    /// It went down while it may have started task trees that are still alive: they are
-    /// killed if it stays down for `max_wait` (their originator is gone).
-    orphans_pending: bool,
     /// What the policy lets it do (None: no policy, everything).
     grant: Option<Grant>,
 }

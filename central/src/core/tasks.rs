@@ -182,40 +182,6 @@ impl Central {
         Ok(())
     }
 
-    /// Kills the task trees `module` started (its root goals and commands) because their
-    /// originator is gone (`why`); returns how many.
-    pub(super) fn kill_trees_sent_by(
-        &mut self,
-        module: &ModuleName,
-        why: &str,
-        out: &mut Vec<Action>,
-    ) -> usize {
-        let mut roots: Vec<u64> = self
-            .tasks
-            .values()
-            .filter(|t| t.root && &t.sender == module)
-            .map(|t| t.node)
-            .collect();
-        roots.sort_unstable();
-        roots.dedup();
-        let mut killed = 0;
-        for node in roots {
-            if !self.tree.contains(node) {
-                continue;
-            }
-            match self.kill_node(NodeId(node), None, out) {
-                Ok(()) => killed += 1,
-                Err(reason) => {
-                    tracing::debug!(node, %reason, "an orphaned tree could not be killed")
-                }
-            }
-        }
-        if killed > 0 {
-            tracing::info!(%module, killed, "task trees killed: {why}");
-        }
-        killed
-    }
-
     /// Kills a node and its subtree (`tca.kill`).
     pub(super) fn kill_node(
         &mut self,

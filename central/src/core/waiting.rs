@@ -79,7 +79,6 @@ impl Central {
                 ready: Default::default(),
                 waiting: Default::default(),
                 down_since: Some(now),
-                orphans_pending: false,
                 grant: None,
             }
         });
@@ -172,8 +171,7 @@ impl Central {
                     .iter()
                     .filter_map(|id| self.tasks.get(id))
                     .map(|t| t.ready_since.max(m.down_since.unwrap_or(0)));
-                let orphans = m.orphans_pending.then(|| m.down_since.unwrap_or(0));
-                held.chain(ready).chain(orphans)
+                held.chain(ready)
             })
             .min()
             .map(|since| since.saturating_add(limit))
@@ -228,21 +226,6 @@ impl Central {
             }
             for id in expired_tasks {
                 self.expire_task(id, &module, limit, out);
-            }
-            let orphaned = self.modules.get_mut(&module).is_some_and(|state| {
-                let due = state.orphans_pending
-                    && now.saturating_sub(state.down_since.unwrap_or(0)) >= limit;
-                if due {
-                    state.orphans_pending = false;
-                }
-                due
-            });
-            if orphaned {
-                let why = format!(
-                    "its originator {module} has been gone for {} s (max wait)",
-                    limit / 1_000_000_000
-                );
-                self.kill_trees_sent_by(&module, &why, out);
             }
         }
     }

@@ -285,7 +285,10 @@ pub async fn walk(
         [],
     )?;
     let outcome = walker
-        .unless_interrupted(tokio::time::timeout(WALK_TIMEOUT, task.outcome()))
+        .unless_interrupted(
+            task.id(),
+            tokio::time::timeout(WALK_TIMEOUT, task.outcome()),
+        )
         .await
         .ok_or_else(|| anyhow::anyhow!("interrupted: the walk is stopped (the walker left)"))?
         .map_err(|_| anyhow::anyhow!("the walk did not end within {WALK_TIMEOUT:?}"))??;

@@ -221,7 +221,10 @@ pub async fn walk(
             [],
         )?;
         let outcome = walker
-            .unless_interrupted(tokio::time::timeout(WALK_TIMEOUT, task.outcome()))
+            .unless_interrupted(
+                task.id(),
+                tokio::time::timeout(WALK_TIMEOUT, task.outcome()),
+            )
             .await
             .ok_or_else(|| {
                 anyhow::anyhow!(

@@ -162,11 +162,16 @@ impl Module {
         self.shared.closed_signal.send_replace(true);
     }
 
-    /// Waits for `work`, unless the user presses Ctrl-C first: then the module says goodbye
-    /// (central kills the task trees it started, so nothing it asked for goes on without
-    /// it) and `None` is returned. Meant for tools that start a task and wait for its end,
-    /// such as a walker. Once this has run, Ctrl-C no longer ends the process by itself.
-    pub async fn unless_interrupted<F: std::future::Future>(&self, work: F) -> Option<F::Output> {
+    /// Waits for `work`, unless the user presses Ctrl-C first: then the task that message
+    /// `task` created (with its subtree) is killed, the module says goodbye, and `None` is
+    /// returned. Meant for tools that start a task and wait for its end, such as a walker, so
+    /// that nothing they asked for goes on without them. Once this has run, Ctrl-C no longer
+    /// ends the process by itself.
+    pub async fn unless_interrupted<F: std::future::Future>(
+        &self,
+        task: MessageId,
+        work: F,
+    ) -> Option<F::Output> {
         let interrupted = async {
             if let Err(err) = tokio::signal::ctrl_c().await {
                 tracing::warn!(%err, "cannot watch for Ctrl-C; it will end the process as usual");
@@ -176,6 +181,9 @@ impl Module {
         tokio::select! {
             done = work => Some(done),
             () = interrupted => {
+                if let Err(err) = self.kill_task(task).await {
+                    tracing::warn!(%err, %task, "cannot kill the interrupted task");
+                }
                 self.close().await;
                 None
             }
