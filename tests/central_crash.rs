@@ -37,19 +37,6 @@ fn spawn_module(name: &str, endpoint: &str, state: &std::path::Path) -> ChildPro
     spawn_tca(&args)
 }
 
-/// Body moves central has logged so far.
-fn body_moves(log: &std::path::Path) -> usize {
-    tca_logs::LogFile::open(log)
-        .map(|l| {
-            tca_logs::stats(&l, tca_logs::TimeBase::Envelope)
-                .by_name
-                .get("bodyMove")
-                .copied()
-                .unwrap_or(0)
-        })
-        .unwrap_or(0)
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_walk_interrupted_by_a_central_crash_resumes_where_the_leg_stands() {
     walk_through_a_central_crash(&free_endpoint()).await;

@@ -10,19 +10,6 @@ use common::*;
 
 const WALKING: [&str; 6] = ["controller", "ism", "ltm", "pdm", "lrp", "gait"];
 
-/// Body moves central has logged so far.
-fn body_moves(log: &std::path::Path) -> usize {
-    tca_logs::LogFile::open(log)
-        .map(|l| {
-            tca_logs::stats(&l, tca_logs::TimeBase::Envelope)
-                .by_name
-                .get("bodyMove")
-                .copied()
-                .unwrap_or(0)
-        })
-        .unwrap_or(0)
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn ctrl_c_of_a_walker_kills_its_walk() {
     let endpoint = unique_local_endpoint();

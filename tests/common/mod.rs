@@ -25,6 +25,19 @@ pub fn tca_output(args: &[&str]) -> std::process::Output {
         .expect("tca runs")
 }
 
+/// Body moves central has logged so far in the traffic log `log` (0 while it cannot be read).
+pub fn body_moves(log: &std::path::Path) -> usize {
+    tca_logs::LogFile::open(log)
+        .map(|l| {
+            tca_logs::stats(&l, tca_logs::TimeBase::Envelope)
+                .by_name
+                .get("bodyMove")
+                .copied()
+                .unwrap_or(0)
+        })
+        .unwrap_or(0)
+}
+
 /// A `tca` child process, killed when dropped.
 pub type ChildProcess = tca_testkit::ChildProcess;
 
