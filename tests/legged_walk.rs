@@ -181,6 +181,43 @@ async fn an_impossible_goal_ends_with_the_reason_and_no_fall() {
     assert!(report.states.iter().all(|s| s.body[0] < 12.0));
 }
 
+/// A leg whose drives die mid-walk: the Controller refuses the next command that would move
+/// it and raises `legged.hardwareFault`; the walk halts standing with the leg in the reason,
+/// and nothing moved after the fault.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_hardware_fault_halts_the_walk_standing_with_the_leg_named() {
+    let fault: tca_legged_walk::InjectedFault = "left_middle@6".parse().expect("a fault");
+    let report = walk(LeggedWalkOptions {
+        faults: vec![fault],
+        ..options("hexapod", "hexapod-flat", 1)
+    })
+    .await;
+    print!("{}", report.summary());
+    assert!(!report.reached);
+    let reason = report.reason.clone().expect("a reason");
+    assert!(reason.contains("hardware fault on left_middle"), "{reason}");
+    assert_safe(&report, &course_terrain("hexapod-flat", 1));
+    let last = report.states.last().expect("states");
+    assert!(last.t_s >= 6.0, "the robot moved until the fault");
+    // Every state after the fault is the state the robot stood in when it struck.
+    let before = report
+        .states
+        .iter()
+        .rev()
+        .find(|s| s.t_s < 6.0)
+        .expect("a state before the fault");
+    let moved_after: Vec<_> = report
+        .states
+        .iter()
+        .filter(|s| s.t_s > before.t_s)
+        .collect();
+    assert!(
+        moved_after.len() <= 2,
+        "at most the move under way when the fault started ended: {} states after it",
+        moved_after.len()
+    );
+}
+
 use common::tca_output as tca;
 
 /// `tca course write`, then `tca walk --robot FILE.urdf --terrain FILE.asc --json`: an
@@ -297,6 +334,22 @@ fn bad_robots_terrains_starts_and_goals_are_refused_with_what_to_do() {
             "FIRST..LAST",
         ),
         (&["course", "write", "moon", "x.asc"], "boulders"),
+        (
+            &["walk", "--robot", "hexapod", "--fault", "wing@3"],
+            "left_front",
+        ),
+        (
+            &["walk", "--robot", "hexapod", "--fault", "left_front"],
+            "LEG@SECONDS",
+        ),
+        (
+            &["walk", "--robot", "hexapod", "--fault", "left_front@-2"],
+            "zero or more",
+        ),
+        (
+            &["walk", "--fault", "slip@2", "--fault", "slip@3"],
+            "one --fault",
+        ),
     ];
     for (args, needle) in cases {
         let out = tca(args);

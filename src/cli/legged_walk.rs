@@ -168,7 +168,21 @@ fn options_of(args: &WalkArgs) -> anyhow::Result<LeggedWalkOptions> {
         ground_truth: args.ground_truth,
         out: Some(args.out.clone().unwrap_or_else(|| default_out(args))),
         connect: args.connect.clone(),
+        faults: parse_faults(&args.fault)?,
     })
+}
+
+/// The legged robot's injected faults, each LEG@SECONDS.
+pub(crate) fn parse_faults(
+    texts: &[String],
+) -> anyhow::Result<Vec<tca_legged_walk::InjectedFault>> {
+    texts
+        .iter()
+        .map(|t| {
+            t.parse()
+                .map_err(|e: String| anyhow::anyhow!("--fault {t:?}: {e}"))
+        })
+        .collect()
 }
 
 /// The walk a legged module (`tca module legged-NAME`) serves: the robot, the terrain (a
@@ -181,6 +195,7 @@ pub(crate) fn module_options(
     start: Option<&str>,
     seed: u64,
     ground_truth: bool,
+    faults: &[String],
 ) -> anyhow::Result<LeggedWalkOptions> {
     let terrain = match (course, terrain) {
         (_, Some(path)) => Some(LeggedTerrain::File(path.to_path_buf())),
@@ -202,6 +217,7 @@ pub(crate) fn module_options(
         start,
         seed,
         ground_truth,
+        faults: parse_faults(faults)?,
         ..LeggedWalkOptions::new(robot)
     })
 }

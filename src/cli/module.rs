@@ -49,6 +49,10 @@ pub(crate) struct ModuleArgs {
     /// legged-gait plans on the true terrain instead of the LTM Manager's maps.
     #[arg(long)]
     ground_truth: bool,
+    /// legged-controller injects a hardware fault: from simulated time SECONDS on, leg
+    /// LEG's drives stop responding (repeat for several legs).
+    #[arg(long, value_name = "LEG@SECONDS")]
+    fault: Vec<String>,
     /// The terrain from an ESRI ASCII grid (.asc) file instead.
     #[arg(long, value_name = "FILE.asc")]
     terrain: Option<std::path::PathBuf>,
@@ -107,15 +111,16 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
             args.start.as_deref(),
             args.seed,
             args.ground_truth,
+            &args.fault,
         )?;
         let module = tca_legged_walk::walk::connect_module_for(inner, &connector, &options)
             .await
             .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
         return serve(module, &args.name, &endpoint).await;
     }
-    if args.robot.is_some() || args.start.is_some() || args.ground_truth {
+    if args.robot.is_some() || args.start.is_some() || args.ground_truth || !args.fault.is_empty() {
         anyhow::bail!(
-            "--robot, --start and --ground-truth are for the legged modules (legged-controller, legged-ism, legged-ltm, legged-gait), not {}",
+            "--robot, --start, --ground-truth and --fault are for the legged modules (legged-controller, legged-ism, legged-ltm, legged-gait), not {}",
             args.name
         );
     }

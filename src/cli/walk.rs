@@ -85,13 +85,15 @@ pub(crate) struct WalkArgs {
     /// machine's milliseconds).
     #[arg(long, value_enum, default_value_t = super::Compute::Paper, conflicts_with = "robot")]
     compute: super::Compute,
-    /// Inject a fault in the simulated Controller during the body move of step STEP
-    /// (counting body moves from the start): `slip` (the foot slips; the Gait Planner
-    /// replans from where the leg is), `force-drop` (the foot force drops off) or
-    /// `limit-switch` (a limit switch trips); the last two are hardware faults that halt the
-    /// walk with the reason.
-    #[arg(long, value_name = "KIND@STEP", value_parser = parse_fault, conflicts_with_all = ["connect", "robot"])]
-    fault: Option<ScheduledFault>,
+    /// Inject a fault in the simulated Controller. For the single leg KIND@STEP, during
+    /// the body move of step STEP (counting body moves from the start): `slip` (the foot
+    /// slips; the Gait Planner replans from where the leg is), `force-drop` (the foot force
+    /// drops off) or `limit-switch` (a limit switch trips); the last two are hardware faults
+    /// that halt the walk with the reason. With --robot LEG@SECONDS: from that time on
+    /// the Controller's motion clock (the states' t_s) the leg's drives stop responding, and a command that would move it raises a
+    /// hardware fault that halts the walk (repeat for several legs).
+    #[arg(long, value_name = "KIND@STEP|LEG@SECONDS", conflicts_with = "connect")]
+    pub(crate) fault: Vec<String>,
     /// A rigid leg: no deflection in the simulated Controller and none compensated by the
     /// planners. By default the leg and rails deflect as the report's did (up to about 20 cm
     /// for a leg move far out to the side) and the planners' kinematics compensate.
@@ -113,8 +115,17 @@ pub(crate) struct WalkArgs {
     pub(crate) json: bool,
 }
 
-fn parse_fault(text: &str) -> Result<ScheduledFault, String> {
-    ScheduledFault::parse(text)
+/// The single leg's fault: at most one, KIND@STEP.
+fn single_leg_fault(faults: &[String]) -> anyhow::Result<Option<ScheduledFault>> {
+    match faults {
+        [] => Ok(None),
+        [one] => ScheduledFault::parse(one)
+            .map(Some)
+            .map_err(|e| anyhow::anyhow!("--fault {one:?}: {e}")),
+        _ => anyhow::bail!(
+            "the single leg takes one --fault KIND@STEP; several legs' faults (LEG@SECONDS) are for a multi-legged robot (--robot NAME)"
+        ),
+    }
 }
 
 pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
@@ -149,7 +160,7 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         step_pictures: args.pictures,
         connect: args.connect.clone(),
         compute: args.compute.into(),
-        fault: args.fault,
+        fault: single_leg_fault(&args.fault)?,
         rigid: args.rigid,
         body_move_law: args.body_move,
     };

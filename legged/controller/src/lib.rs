@@ -27,6 +27,9 @@
 //! - Commands: `legged.legMove`, `legged.bodyMove`, one at a time. A move that fails raises
 //!   `legged.moveFailed` (or `legged.tipOver`) in the command's context and ends the
 //!   command with failure.
+//! - Injected hardware faults ([`InjectedFault`]): from a set simulated time on, every
+//!   command that would move a given leg is refused and raises `legged.hardwareFault`
+//!   naming the leg, so that what a walk does when a drive dies can be tried.
 //! - Informs it sends: `legged.supportState` at the first command (the state before it), at
 //!   every lift-off and after every move carried out; `legged.footContact` at every lift-off
 //!   and touch-down. Their `t_s` is the simulator's clock.
@@ -46,5 +49,5 @@
 pub mod config;
 mod serve;
 
-pub use config::{DEFAULT_MODULE_NAME, LeggedControllerConfig};
+pub use config::{DEFAULT_MODULE_NAME, InjectedFault, LeggedControllerConfig};
 pub use serve::connect;

@@ -4,8 +4,8 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
 use tca_legged_messages::{
-    BodyMove, BodyPose, FootContact, LegMove, LegState, LeggedStatus, LeggedStatusReply,
-    RobotDescription, RobotModel, SupportState,
+    BodyMove, BodyPose, FootContact, HardwareFault, LegMove, LegState, LeggedStatus,
+    LeggedStatusReply, RobotDescription, RobotModel, SupportState,
 };
 use tca_legged_sim::{
     LeggedSim, MoveError, MoveException, MoveReport, isometry_to_pose, pose_to_isometry,
@@ -13,7 +13,7 @@ use tca_legged_sim::{
 };
 use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
 
-use crate::config::LeggedControllerConfig;
+use crate::config::{InjectedFault, LeggedControllerConfig};
 
 /// Connects the simulated Controller to central under `config.module_name` and serves the
 /// `legged.` Controller messages until the returned [`Module`] (and every clone) is dropped
@@ -30,6 +30,11 @@ pub async fn connect(
         config.params.clone(),
     )
     .map_err(|e| ModuleError::Config(format!("legged controller: {e}")))?;
+    for fault in &config.faults {
+        fault
+            .check(&config.model)
+            .map_err(|e| ModuleError::Config(format!("legged controller: {e}")))?;
+    }
     let description = RobotDescription {
         name: config.model.name().to_owned(),
         urdf: config.urdf.clone(),
@@ -45,6 +50,7 @@ pub async fn connect(
         state: Arc::new(Mutex::new(State {
             sim,
             commanded: false,
+            faults: config.faults.clone(),
         })),
         turn: Arc::new(tokio::sync::Mutex::new(())),
     };
@@ -56,8 +62,11 @@ pub async fn connect(
             move |ctx: Context, m: LegMove| {
                 let s = s.clone();
                 async move {
-                    s.command(&ctx, |sim| sim.leg_move(&m.leg, &m.waypoints, m.transition))
-                        .await
+                    let legs = vec![m.leg.clone()];
+                    s.command(&ctx, Moves::Legs(legs), |sim| {
+                        sim.leg_move(&m.leg, &m.waypoints, m.transition)
+                    })
+                    .await
                 }
             }
         })
@@ -67,7 +76,8 @@ pub async fn connect(
                 let s = s.clone();
                 async move {
                     let target = pose_to_isometry(&m.target);
-                    s.command(&ctx, |sim| sim.body_move(&target)).await
+                    s.command(&ctx, Moves::Standing, |sim| sim.body_move(&target))
+                        .await
                 }
             }
         })
@@ -115,6 +125,38 @@ struct State {
     sim: LeggedSim,
     /// Whether a command came already (the first sends the state before it).
     commanded: bool,
+    /// Hardware faults to inject.
+    faults: Vec<InjectedFault>,
+}
+
+impl State {
+    /// The first injected fault active now on one of the legs a command moves.
+    fn fault_for(&self, moves: &Moves) -> Option<HardwareFault> {
+        let legs = match moves {
+            Moves::Legs(legs) => legs.clone(),
+            Moves::Standing => self.sim.standing_legs(),
+        };
+        let clock_s = self.sim.clock_s();
+        let fault = self
+            .faults
+            .iter()
+            .find(|f| f.active_at(clock_s) && legs.contains(&f.leg))?;
+        Some(HardwareFault {
+            leg: Some(fault.leg.clone()),
+            detail: format!(
+                "the drives of leg {} stopped responding at {:.1} s of motion (an injected fault); nothing was moved",
+                fault.leg, fault.at_s
+            ),
+        })
+    }
+}
+
+/// Which legs a command moves.
+enum Moves {
+    /// These legs.
+    Legs(Vec<String>),
+    /// Every standing leg (a body move).
+    Standing,
 }
 
 #[derive(Clone)]
@@ -140,9 +182,18 @@ impl Shared {
     async fn command(
         &self,
         ctx: &Context,
+        moves: Moves,
         run: impl FnOnce(&mut LeggedSim) -> Result<MoveReport, MoveError>,
     ) -> Result<(), HandlerError> {
         let _turn = self.turn.lock().await;
+        let fault = self.lock().fault_for(&moves);
+        if let Some(fault) = fault {
+            tracing::warn!(leg = ?fault.leg, "injected hardware fault: a command refused");
+            if let Err(r) = ctx.raise(&fault) {
+                tracing::warn!(error = %r, "could not raise the hardware fault");
+            }
+            return Err(HandlerError::new(fault.detail));
+        }
         let (outgoing, duration_s, result) = {
             let mut state = self.lock();
             let mut outgoing = Vec::new();

@@ -30,5 +30,6 @@ mod walks;
 pub use check::{StateProblem, check_states};
 pub use report::{FootRecord, LeggedWalkReport, StateRecord};
 pub use system::{LEGGED_MODULES, LeggedSetup, connect_all, connect_module};
+pub use tca_legged_controller::InjectedFault;
 pub use terrain::LeggedTerrain;
 pub use walk::{LeggedWalkOptions, walk};

@@ -19,7 +19,9 @@ pub struct FootRecord {
 /// The robot at one support change.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StateRecord {
-    /// Simulated time, seconds from the start of the walk.
+    /// The Controller's motion clock: simulated seconds of moves carried out since the
+    /// start of the walk (the robot standing still while a step is planned does not count;
+    /// the report's `sim_time_s` does).
     pub t_s: f64,
     /// Body pose `[x, y, z, roll, pitch, yaw]`, world frame, metres and radians.
     pub body: [f64; 6],

@@ -5,7 +5,7 @@
 use std::sync::Arc;
 
 use tca_ism::{IsmConfig, PoseSource, SensorSpec, VirtualScanner};
-use tca_legged_controller::LeggedControllerConfig;
+use tca_legged_controller::{InjectedFault, LeggedControllerConfig};
 use tca_legged_model::RobotModel;
 use tca_legged_sim::{SimParams, StartPose};
 use tca_ltm::LtmConfig;
@@ -33,6 +33,8 @@ pub struct LeggedSetup {
     pub seed: u64,
     /// The walking module plans on the true terrain instead of the LTM Manager's maps.
     pub ground_truth: bool,
+    /// Hardware faults the simulated Controller injects.
+    pub faults: Vec<InjectedFault>,
 }
 
 impl LeggedSetup {
@@ -63,6 +65,7 @@ pub async fn connect_module(
                 start: setup.start,
                 params: SimParams::for_model(&setup.model),
                 module_name: "controller".into(),
+                faults: setup.faults.clone(),
             };
             tca_legged_controller::connect(connector, config).await
         }

@@ -10,6 +10,7 @@ use anyhow::Context as _;
 use nalgebra::Point2;
 use tca_central::StartOptions;
 use tca_free_gait::GaitParams;
+use tca_legged_controller::InjectedFault;
 use tca_legged_messages::{BodyPose, FootContact, LeggedStatus, LeggedWalk, SupportState};
 use tca_legged_model::{BUILTIN_ROBOTS, RobotModel};
 use tca_legged_sim::StartPose;
@@ -55,6 +56,8 @@ pub struct LeggedWalkOptions {
     /// process, `tca module legged-NAME`, started with the same robot, terrain, start and
     /// seed) instead of starting central and the modules here; the log is then central's.
     pub connect: Option<String>,
+    /// Hardware faults the simulated Controller injects (none by default).
+    pub faults: Vec<InjectedFault>,
 }
 
 impl LeggedWalkOptions {
@@ -71,6 +74,7 @@ impl LeggedWalkOptions {
             ground_truth: false,
             out: None,
             connect: None,
+            faults: Vec::new(),
         }
     }
 }
@@ -161,6 +165,9 @@ pub fn prepare(options: &LeggedWalkOptions) -> anyhow::Result<Prepared> {
         &field,
         &model,
     )?;
+    for fault in &options.faults {
+        fault.check(&model).map_err(|e| anyhow::anyhow!("{e}"))?;
+    }
     let tolerance_m = options.tolerance_m.unwrap_or(params.goal_tolerance_m);
     if !(tolerance_m > 0.0 && tolerance_m.is_finite()) {
         anyhow::bail!("the goal tolerance {tolerance_m} m must be a positive distance");
@@ -176,6 +183,7 @@ pub fn prepare(options: &LeggedWalkOptions) -> anyhow::Result<Prepared> {
         },
         seed: options.seed,
         ground_truth: options.ground_truth,
+        faults: options.faults.clone(),
     };
     Ok(Prepared {
         setup,
