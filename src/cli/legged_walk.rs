@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use tca_legged_walk::walk::Progress;
-use tca_legged_walk::{LeggedTerrain, LeggedWalkOptions};
+use tca_legged_walk::{LeggedPlanner, LeggedTerrain, LeggedWalkOptions};
 use tokio::sync::mpsc;
 
 use super::walk::WalkArgs;
@@ -169,6 +169,8 @@ fn options_of(args: &WalkArgs) -> anyhow::Result<LeggedWalkOptions> {
         out: Some(args.out.clone().unwrap_or_else(|| default_out(args))),
         connect: args.connect.clone(),
         faults: parse_faults(&args.fault)?,
+        planner: LeggedPlanner::parse(&args.planner, args.gait.as_deref())
+            .map_err(|e| anyhow::anyhow!("--planner: {e}"))?,
     })
 }
 
@@ -185,18 +187,35 @@ pub(crate) fn parse_faults(
         .collect()
 }
 
+/// What `tca module legged-NAME` was told of its walk.
+#[derive(Clone, Copy)]
+pub(crate) struct ModuleWalk<'a> {
+    pub(crate) robot: &'a str,
+    pub(crate) course: Option<&'a str>,
+    pub(crate) terrain: Option<&'a std::path::Path>,
+    pub(crate) start: Option<&'a str>,
+    pub(crate) seed: u64,
+    pub(crate) ground_truth: bool,
+    pub(crate) faults: &'a [String],
+    pub(crate) planner: &'a str,
+    pub(crate) gait: Option<&'a str>,
+}
+
 /// The walk a legged module (`tca module legged-NAME`) serves: the robot, the terrain (a
 /// course or a file), the start and the seed it shares with the walker and the other
 /// modules.
-pub(crate) fn module_options(
-    robot: &str,
-    course: Option<&str>,
-    terrain: Option<&std::path::Path>,
-    start: Option<&str>,
-    seed: u64,
-    ground_truth: bool,
-    faults: &[String],
-) -> anyhow::Result<LeggedWalkOptions> {
+pub(crate) fn module_options(m: &ModuleWalk<'_>) -> anyhow::Result<LeggedWalkOptions> {
+    let ModuleWalk {
+        robot,
+        course,
+        terrain,
+        start,
+        seed,
+        ground_truth,
+        faults,
+        planner,
+        gait,
+    } = *m;
     let terrain = match (course, terrain) {
         (_, Some(path)) => Some(LeggedTerrain::File(path.to_path_buf())),
         (Some(name), None) => Some(LeggedTerrain::Course {
@@ -218,6 +237,8 @@ pub(crate) fn module_options(
         seed,
         ground_truth,
         faults: parse_faults(faults)?,
+        planner: LeggedPlanner::parse(planner, gait)
+            .map_err(|e| anyhow::anyhow!("--planner: {e}"))?,
         ..LeggedWalkOptions::new(robot)
     })
 }

@@ -53,6 +53,13 @@ pub(crate) struct ModuleArgs {
     /// LEG's drives stop responding (repeat for several legs).
     #[arg(long, value_name = "LEG@SECONDS")]
     fault: Vec<String>,
+    /// What legged-gait plans with: `free` (the free gait) or `rrt` (RRT-Connect over the
+    /// whole terrain).
+    #[arg(long, value_name = "free|rrt", default_value = "free")]
+    planner: String,
+    /// With --planner rrt: `tripod` (default) or `wave`.
+    #[arg(long, value_name = "tripod|wave")]
+    gait: Option<String>,
     /// The terrain from an ESRI ASCII grid (.asc) file instead.
     #[arg(long, value_name = "FILE.asc")]
     terrain: Option<std::path::PathBuf>,
@@ -104,15 +111,17 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
                 args.name
             );
         };
-        let options = super::legged_walk::module_options(
+        let options = super::legged_walk::module_options(&super::legged_walk::ModuleWalk {
             robot,
-            args.course.as_deref(),
-            args.terrain.as_deref(),
-            args.start.as_deref(),
-            args.seed,
-            args.ground_truth,
-            &args.fault,
-        )?;
+            course: args.course.as_deref(),
+            terrain: args.terrain.as_deref(),
+            start: args.start.as_deref(),
+            seed: args.seed,
+            ground_truth: args.ground_truth,
+            faults: &args.fault,
+            planner: &args.planner,
+            gait: args.gait.as_deref(),
+        })?;
         let module = tca_legged_walk::walk::connect_module_for(inner, &connector, &options)
             .await
             .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;

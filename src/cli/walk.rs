@@ -48,6 +48,20 @@ pub(crate) struct WalkArgs {
     /// (the scanner and the map still run), to tell a planner's failings from perception's.
     #[arg(long, requires = "robot")]
     pub(crate) ground_truth: bool,
+    /// With --robot: what plans the steps: `free` (the free gait, step by step on the LTM
+    /// Manager's map) or `rrt` (the integrated RRT-Connect planner: the whole walk at once
+    /// on the terrain given, planned again from where the robot stands after a failed
+    /// move).
+    #[arg(
+        long,
+        value_name = "free|rrt",
+        default_value = "free",
+        requires = "robot"
+    )]
+    pub(crate) planner: String,
+    /// With --planner rrt: the gait of its moves, `tripod` (default) or `wave`.
+    #[arg(long, value_name = "tripod|wave", requires = "robot")]
+    pub(crate) gait: Option<String>,
     /// With --robot: walk once per seed in FIRST..LAST (e.g. 1..5), each in DIR/seed-N, and
     /// print one line per walk and a tally (exit status 0 only when every walk reached its
     /// goal with no fall and no collision).

@@ -52,6 +52,16 @@ pub enum Action {
         /// Where the foot is expected to touch: the bottom of its contact sphere, world.
         foothold: Point3<f64>,
     },
+    /// Move one leg's foot through joint-space way-points and leave it in the air (a part
+    /// of a swing that goes on after a body move): execute as `legged.legMove` with
+    /// `transition = false`. The free gait never plans one; planners that move the body
+    /// while a leg swings do.
+    Reach {
+        /// The leg's index in the model's order.
+        leg: usize,
+        /// Joint positions to pass through; the foot stays at the last.
+        waypoints: Vec<Vec<f64>>,
+    },
     /// Move the body to a pose in a straight line (position lerp, orientation slerp), the
     /// standing feet staying where they are.
     Body {

@@ -48,7 +48,7 @@ pub use create::{Refusal, create_posture};
 pub use error::PlanError;
 pub use foothold::{Foothold, select_foothold};
 pub use params::{Gait, RrtParams};
-pub use picture::{draw_plan, write_plan_png};
+pub use picture::{RouteDrawing, draw_plan, draw_route, write_plan_png};
 pub use pose::{BodyPose, Posture};
 pub use robot::Robot;
 pub use rrt::{Extension, Node, Plan, PlanStats, Planner, Tree};

@@ -6,17 +6,17 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::time::Instant;
 
-use nalgebra::{Point2, Vector2};
+use nalgebra::{Point2, Point3, Vector2};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use tca_legged_model::RobotModel;
 use tca_robot::HeightField;
 
 use crate::create::{Refusal, create_posture};
 use crate::error::PlanError;
 use crate::params::RrtParams;
-use crate::pose::{Posture, wrap};
+use crate::pose::{BodyPose, Posture, wrap};
 use crate::robot::Robot;
 use crate::terrain::Terrain;
 use crate::traverse::{Transition, check_traverse};
@@ -79,7 +79,7 @@ pub enum Extension {
 }
 
 /// A planned walk.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Plan {
     /// The postures from the start to the goal.
     pub postures: Vec<Posture>,
@@ -104,7 +104,7 @@ impl Plan {
 }
 
 /// Figures of a search.
-#[derive(Debug, Clone, Default, Serialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct PlanStats {
     /// Iterations of the main loop run.
     pub iterations: usize,
@@ -178,7 +178,71 @@ impl Planner {
         start_yaw: f64,
         goal: Point2<f64>,
     ) -> Result<Plan, PlanError> {
+        let posture = self
+            .posture_at(start, start_yaw)
+            .map_err(|r| PlanError::BadEndpoint {
+                which: "start",
+                x: start.x,
+                y: start.y,
+                reason: r.describe(),
+            })?;
+        self.plan_from(posture, goal)
+    }
+
+    /// The posture the robot stands in: its body pose, every foot's contact-sphere centre
+    /// and every leg's joints (as a simulator or a robot reports them), with its centre of
+    /// mass and margin computed; `None` when the joints do not fit the model.
+    pub fn posture_from(
+        &self,
+        body: BodyPose,
+        feet: Vec<Point3<f64>>,
+        joints: Vec<Vec<f64>>,
+    ) -> Option<Posture> {
+        if feet.len() != self.robot.leg_count() || joints.len() != self.robot.leg_count() {
+            return None;
+        }
+        let com = body.isometry() * self.robot.model().centre_of_mass(&joints).ok()?.centre;
+        let feet_xy: Vec<Point2<f64>> = feet.iter().map(|f| Point2::new(f.x, f.y)).collect();
+        let com_xy = Point2::new(com.x, com.y);
+        Some(Posture {
+            body,
+            margin_m: crate::checks::margin(&feet_xy, com_xy),
+            feet,
+            joints,
+            com: Point3::from(com.coords),
+        })
+    }
+
+    /// Why the robot in posture `joints` with its body at `body` is not clear: two of its
+    /// parts touching, or a link nearer the ground than `clearance_m`; `Ok` when clear.
+    /// The checks the planner makes of every posture along a move.
+    pub fn check_clear(
+        &self,
+        body: &nalgebra::Isometry3<f64>,
+        joints: &[Vec<f64>],
+        clearance_m: f64,
+    ) -> Result<(), String> {
+        let poses = self
+            .robot
+            .shape_poses(body, joints)
+            .ok_or_else(|| "joint positions out of range".to_owned())?;
+        if let Some(why) = crate::checks::self_collision(&self.robot, &poses, 0.0) {
+            return Err(why);
+        }
+        if let Some(why) =
+            crate::checks::terrain_collision(&self.robot, &self.terrain, &poses, clearance_m)
+        {
+            return Err(why);
+        }
+        Ok(())
+    }
+
+    /// Plans from the posture `start` (where the robot stands) to the body over `goal`
+    /// (facing the way from the start to the goal).
+    pub fn plan_from(&self, start_posture: Posture, goal: Point2<f64>) -> Result<Plan, PlanError> {
         let began = Instant::now();
+        let start = start_posture.body.xy();
+        let start_yaw = start_posture.body.yaw;
         let endpoint = |which: &'static str, p: Point2<f64>, yaw: f64| {
             self.posture_at(p, yaw).map_err(|r| PlanError::BadEndpoint {
                 which,
@@ -201,7 +265,7 @@ impl Planner {
             transition: None,
         };
         let mut a = Tree {
-            nodes: vec![root(endpoint("start", start, start_yaw)?)],
+            nodes: vec![root(start_posture)],
             forward: true,
         };
         let mut b = Tree {

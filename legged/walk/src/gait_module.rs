@@ -34,7 +34,8 @@ use tca_robot::HeightField;
 use tca_single_leg_messages::{MapKind, MapRegion, PlanePoint};
 
 use crate::map_view::{MapView, StepView};
-use crate::messages::{GaitStep, PlannedLeg, PlannedStart, StepPlanned};
+use crate::messages::{GaitStep, PlannedLeg, PlannedStart, RoutePlanned, StepPlanned};
+use crate::rrt_steps::RrtSteps;
 use crate::walks::{WalkState, Walks};
 
 /// The module's default name.
@@ -60,6 +61,24 @@ pub struct GaitModuleConfig {
     /// Plan on this true terrain instead of the LTM Manager's maps (to tell a planner's
     /// failings from perception's); `None`: the maps.
     pub ground_truth: Option<Arc<HeightField>>,
+    /// What plans the steps.
+    pub planner: StepPlanner,
+}
+
+/// What plans the walking module's steps.
+#[derive(Debug, Clone, Default)]
+pub enum StepPlanner {
+    /// The free gait, one step at a time on the map around the body.
+    #[default]
+    FreeGait,
+    /// The integrated RRT-Connect planner (`tca-rrt`): the whole walk at once on the given
+    /// terrain, planned again from where the robot stands after a failed move.
+    Rrt {
+        /// The terrain it plans on.
+        terrain: Arc<HeightField>,
+        /// Its parameters.
+        params: tca_rrt::RrtParams,
+    },
 }
 
 /// Allowance for a perceived map's height error, metres: twice it (1 cm) is about the 95th
@@ -93,6 +112,7 @@ impl GaitModuleConfig {
             max_replans: 8,
             simulated_time: true,
             ground_truth: None,
+            planner: StepPlanner::FreeGait,
         }
     }
 }
@@ -100,6 +120,7 @@ impl GaitModuleConfig {
 #[derive(Clone)]
 struct Shared {
     gait: Arc<FreeGait>,
+    rrt: Option<Arc<RrtSteps>>,
     model: Arc<RobotModel>,
     config: Arc<GaitModuleConfig>,
     walks: Walks,
@@ -117,8 +138,21 @@ pub async fn connect(
         )));
     }
     let gait = FreeGait::new(config.model.clone(), config.params.clone());
+    let rrt = match &config.planner {
+        StepPlanner::FreeGait => None,
+        StepPlanner::Rrt { terrain, params } => Some(Arc::new(
+            RrtSteps::new(
+                config.model.clone(),
+                terrain.clone(),
+                params.clone(),
+                config.params.below_foothold_m,
+            )
+            .map_err(|e| ModuleError::Config(format!("the RRT-Connect planner: {e}")))?,
+        )),
+    };
     let shared = Shared {
         gait: Arc::new(gait),
+        rrt,
         model: config.model.clone(),
         walks: Walks::default(),
         config: Arc::new(config.clone()),
@@ -328,48 +362,16 @@ impl Shared {
             Some(start) => from_planned(start),
             None => self.robot_state(ctx).await?,
         };
-        let at = Point2::new(state.body.translation.x, state.body.translation.y);
         if self.gait.reached(&state, goal, step.tolerance_m) {
             tracing::info!(step = step.step, "at the goal: no step needed");
             return Ok(());
         }
-        if let (Some(walk), None) = (walk, &step.start) {
-            self.walks
-                .step_starts_at(walk, (at - goal).norm())
-                .map_err(HandlerError::new)?;
-        }
-        // The map is of the region around where the step starts; the scanner images from
-        // where the body stands now.
-        let view = self.maps(ctx, at).await?;
-        let began = Instant::now();
-        let gait = self.gait.clone();
-        let planning_state = state.clone();
-        let (plan, view) = tokio::task::spawn_blocking(move || {
-            let plan = gait.plan_step(&planning_state, &view, goal);
-            (plan, view)
-        })
-        .await
-        .map_err(|e| HandlerError::new(format!("the planning task ended abnormally: {e}")))?;
-        let elapsed = began.elapsed();
-        if ctx.simulated_time() {
-            ctx.spend(ComputeTime::Measured.charged(elapsed));
-        }
-        let plan: StepPlan = match plan {
-            Ok(p) => p,
-            Err(GaitError::GoalReached { .. }) => {
-                tracing::info!(step = step.step, "the free gait finds the body at the goal");
-                return Ok(());
-            }
-            Err(e) => {
-                let known = view.known_share(at, self.config.map_half_side_m * 0.5);
-                return Err(HandlerError::new(format!(
-                    "step {} from ({:.2}, {:.2}) cannot be planned: {e} ({:.0}% of the map near the body is known)",
-                    step.step,
-                    at.x,
-                    at.y,
-                    known * 100.0
-                )));
-            }
+        let planned = match &self.rrt {
+            Some(rrt) => self.plan_rrt(ctx, rrt, &step, &state, goal).await?,
+            None => self.plan_free(ctx, walk, &step, &state, goal).await?,
+        };
+        let Some((plan, elapsed)) = planned else {
+            return Ok(());
         };
         if let Some(walk) = walk
             && self.walks.is_stale(walk, step.step)
@@ -404,6 +406,26 @@ impl Shared {
                             leg: name,
                             waypoints: waypoints.clone(),
                             transition: true,
+                        },
+                        constraints,
+                    )?
+                }
+                Action::Reach { leg, waypoints } => {
+                    let name = self
+                        .model
+                        .legs()
+                        .get(*leg)
+                        .map(|l| l.name().to_string())
+                        .ok_or_else(|| {
+                            HandlerError::new(format!(
+                                "the plan names leg {leg}, which the robot does not have"
+                            ))
+                        })?;
+                    ctx.send_task(
+                        &LegMove {
+                            leg: name,
+                            waypoints: waypoints.clone(),
+                            transition: false,
                         },
                         constraints,
                     )?
@@ -461,6 +483,102 @@ impl Shared {
             constraint,
         )?;
         Ok(())
+    }
+
+    /// The free gait's step from `state` on the map around the body; `None` at the goal.
+    async fn plan_free(
+        &self,
+        ctx: &Context,
+        walk: Option<tca_messages::NodeId>,
+        step: &GaitStep,
+        state: &GaitState,
+        goal: Point2<f64>,
+    ) -> Result<Option<(StepPlan, std::time::Duration)>, HandlerError> {
+        let at = Point2::new(state.body.translation.x, state.body.translation.y);
+        if let (Some(walk), None) = (walk, &step.start) {
+            self.walks
+                .step_starts_at(walk, (at - goal).norm())
+                .map_err(HandlerError::new)?;
+        }
+        // The map is of the region around where the step starts; the scanner images from
+        // where the body stands now.
+        let view = self.maps(ctx, at).await?;
+        let began = Instant::now();
+        let gait = self.gait.clone();
+        let planning_state = state.clone();
+        let (plan, view) = tokio::task::spawn_blocking(move || {
+            let plan = gait.plan_step(&planning_state, &view, goal);
+            (plan, view)
+        })
+        .await
+        .map_err(|e| HandlerError::new(format!("the planning task ended abnormally: {e}")))?;
+        let elapsed = began.elapsed();
+        if ctx.simulated_time() {
+            ctx.spend(ComputeTime::Measured.charged(elapsed));
+        }
+        match plan {
+            Ok(p) => Ok(Some((p, elapsed))),
+            Err(GaitError::GoalReached { .. }) => {
+                tracing::info!(step = step.step, "the free gait finds the body at the goal");
+                Ok(None)
+            }
+            Err(e) => {
+                let known = view.known_share(at, self.config.map_half_side_m * 0.5);
+                Err(HandlerError::new(format!(
+                    "step {} from ({:.2}, {:.2}) cannot be planned: {e} ({:.0}% of the map near the body is known)",
+                    step.step,
+                    at.x,
+                    at.y,
+                    known * 100.0
+                )))
+            }
+        }
+    }
+
+    /// The RRT-Connect plan's next step from `state` (planning the walk when the robot is
+    /// not where the plan expects it); `None` when the plan has no step left.
+    async fn plan_rrt(
+        &self,
+        ctx: &Context,
+        rrt: &Arc<RrtSteps>,
+        step: &GaitStep,
+        state: &GaitState,
+        goal: Point2<f64>,
+    ) -> Result<Option<(StepPlan, std::time::Duration)>, HandlerError> {
+        let began = Instant::now();
+        let (rrt, planning_state) = (rrt.clone(), state.clone());
+        let next = tokio::task::spawn_blocking(move || rrt.next_step(&planning_state, goal))
+            .await
+            .map_err(|e| HandlerError::new(format!("the planning task ended abnormally: {e}")))?;
+        let elapsed = began.elapsed();
+        if ctx.simulated_time() {
+            ctx.spend(ComputeTime::Measured.charged(elapsed));
+        }
+        let at = state.body.translation;
+        let next = next.map_err(|e| {
+            HandlerError::new(format!(
+                "step {} from ({:.2}, {:.2}) cannot be planned: {e}",
+                step.step, at.x, at.y
+            ))
+        })?;
+        let Some(next) = next else {
+            tracing::info!(step = step.step, "the RRT-Connect plan has no step left");
+            return Ok(None);
+        };
+        if let Some(plan) = &next.new_plan {
+            let route = RoutePlanned::of(step.step, plan, elapsed);
+            tracing::info!(
+                step = step.step,
+                postures = plan.postures.len(),
+                nodes = plan.stats.nodes,
+                ms = route.planning_ms,
+                "RRT-Connect planned the walk"
+            );
+            if let Err(e) = ctx.inform(&route) {
+                tracing::warn!(%e, "routePlanned not sent");
+            }
+        }
+        Ok(Some((next.step, elapsed)))
     }
 
     async fn replan(

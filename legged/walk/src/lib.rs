@@ -22,6 +22,7 @@ pub mod messages;
 pub mod mount;
 pub mod picture;
 pub mod report;
+pub mod rrt_steps;
 pub mod system;
 pub mod terrain;
 pub mod walk;
@@ -29,7 +30,7 @@ mod walks;
 
 pub use check::{StateProblem, check_states};
 pub use report::{FootRecord, LeggedWalkReport, StateRecord};
-pub use system::{LEGGED_MODULES, LeggedSetup, connect_all, connect_module};
+pub use system::{LEGGED_MODULES, LeggedPlanner, LeggedSetup, connect_all, connect_module};
 pub use tca_legged_controller::InjectedFault;
 pub use terrain::LeggedTerrain;
 pub use walk::{LeggedWalkOptions, walk};

@@ -60,3 +60,57 @@ pub struct StepPlanned {
     pub planning_ms: f64,
 }
 message!(StepPlanned: inform "legged.stepPlanned");
+
+/// Inform: the RRT-Connect planner planned the walk (at its first step, and again after a
+/// failed move): the path of postures, the footholds and both trees, for the report and
+/// its picture.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RoutePlanned {
+    /// The step that asked for the plan.
+    pub step: u32,
+    /// The body at each posture of the path `[x, y, yaw]`, world frame, metres and radians.
+    pub path: Vec<[f64; 3]>,
+    /// Every planned foothold `[x, y]` (contact-sphere centres), world frame, metres.
+    pub footholds: Vec<[f64; 2]>,
+    /// The start tree's edges `[x0, y0, x1, y1]`, world frame, metres.
+    pub start_tree: Vec<[f64; 4]>,
+    /// The goal tree's edges `[x0, y0, x1, y1]`.
+    pub goal_tree: Vec<[f64; 4]>,
+    /// Nodes of both trees.
+    pub nodes: u64,
+    /// Iterations of the search.
+    pub iterations: u64,
+    /// Length of the body's path over the ground, metres.
+    pub length_m: f64,
+    /// Wall-clock time the planning took, milliseconds.
+    pub planning_ms: f64,
+}
+message!(RoutePlanned: inform "legged.routePlanned");
+
+impl RoutePlanned {
+    /// The inform for `plan`, planned at step `step` in `elapsed`.
+    pub fn of(step: u32, plan: &tca_rrt::Plan, elapsed: std::time::Duration) -> Self {
+        let edges = |tree: &[(nalgebra::Point2<f64>, nalgebra::Point2<f64>)]| {
+            tree.iter().map(|(a, b)| [a.x, a.y, b.x, b.y]).collect()
+        };
+        RoutePlanned {
+            step,
+            path: plan
+                .postures
+                .iter()
+                .map(|p| [p.body.x, p.body.y, p.body.yaw])
+                .collect(),
+            footholds: plan
+                .postures
+                .iter()
+                .flat_map(|p| p.feet.iter().map(|f| [f.x, f.y]))
+                .collect(),
+            start_tree: edges(&plan.start_tree),
+            goal_tree: edges(&plan.goal_tree),
+            nodes: plan.stats.nodes as u64,
+            iterations: plan.stats.iterations as u64,
+            length_m: plan.length_m(),
+            planning_ms: elapsed.as_secs_f64() * 1e3,
+        }
+    }
+}

@@ -99,3 +99,39 @@ pub fn map_picture(terrain: &HeightField, report: &LeggedWalkReport) -> Canvas {
     }
     c
 }
+
+/// The RRT-Connect planner's plan over the terrain: both trees, the path and the planned
+/// footholds (see `tca_rrt::draw_route`), at 100 pixels a metre or less for a large
+/// terrain.
+pub fn route_picture(
+    terrain: &std::sync::Arc<HeightField>,
+    foot_radius_m: f64,
+    route: &crate::messages::RoutePlanned,
+) -> Canvas {
+    use tca_rrt::nalgebra::Point2;
+    let edges = |e: &[[f64; 4]]| -> Vec<(Point2<f64>, Point2<f64>)> {
+        e.iter()
+            .map(|v| (Point2::new(v[0], v[1]), Point2::new(v[2], v[3])))
+            .collect()
+    };
+    let (start_tree, goal_tree) = (edges(&route.start_tree), edges(&route.goal_tree));
+    let path: Vec<Point2<f64>> = route.path.iter().map(|p| Point2::new(p[0], p[1])).collect();
+    let footholds: Vec<Point2<f64>> = route
+        .footholds
+        .iter()
+        .map(|p| Point2::new(p[0], p[1]))
+        .collect();
+    let (lo, hi) = terrain.extent();
+    let pixels_per_m = (MAP_PX / (hi.x - lo.x).max(hi.y - lo.y).max(1e-6)).min(100.0);
+    let view = tca_rrt::Terrain::new(terrain.clone(), foot_radius_m);
+    tca_rrt::draw_route(
+        &view,
+        &tca_rrt::RouteDrawing {
+            start_tree: &start_tree,
+            goal_tree: &goal_tree,
+            path: &path,
+            footholds: &footholds,
+        },
+        pixels_per_m,
+    )
+}

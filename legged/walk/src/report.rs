@@ -57,6 +57,39 @@ impl From<&SupportState> for StateRecord {
     }
 }
 
+/// One plan of the RRT-Connect planner.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RouteSummary {
+    /// The step that asked for it.
+    pub step: u32,
+    /// Postures on the path.
+    pub postures: usize,
+    /// Nodes of both trees.
+    pub nodes: u64,
+    /// Iterations of the search.
+    pub iterations: u64,
+    /// Length of the body's path over the ground, metres.
+    pub length_m: f64,
+    /// Wall-clock planning time, milliseconds.
+    pub planning_ms: f64,
+    /// The body at each posture `[x, y, yaw]`, world frame.
+    pub path: Vec<[f64; 3]>,
+}
+
+impl From<&crate::messages::RoutePlanned> for RouteSummary {
+    fn from(r: &crate::messages::RoutePlanned) -> Self {
+        RouteSummary {
+            step: r.step,
+            postures: r.path.len(),
+            nodes: r.nodes,
+            iterations: r.iterations,
+            length_m: r.length_m,
+            planning_ms: r.planning_ms,
+            path: r.path.clone(),
+        }
+    }
+}
+
 /// What happened on a walk. The first fields are the summary; `states` holds every support
 /// change so that the walk can be checked against the terrain.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -99,6 +132,13 @@ pub struct LeggedWalkReport {
     /// every state consistent).
     #[serde(default)]
     pub state_problems: Vec<String>,
+    /// What planned the steps: `free gait` or `RRT-Connect (tripod gait)`.
+    #[serde(default)]
+    pub planner: String,
+    /// The RRT-Connect planner's plans of the walk (the first, and one after each failed
+    /// move); empty for the free gait.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub routes: Vec<RouteSummary>,
     /// Files written.
     pub outputs: Vec<PathBuf>,
 }

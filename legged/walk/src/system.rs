@@ -35,6 +35,45 @@ pub struct LeggedSetup {
     pub ground_truth: bool,
     /// Hardware faults the simulated Controller injects.
     pub faults: Vec<InjectedFault>,
+    /// What plans the steps.
+    pub planner: LeggedPlanner,
+}
+
+/// What plans a legged walk's steps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LeggedPlanner {
+    /// The free gait, step by step on the LTM Manager's map (or the true terrain with
+    /// `ground_truth`).
+    #[default]
+    FreeGait,
+    /// The integrated RRT-Connect planner over the whole terrain, in this gait.
+    Rrt(tca_rrt::Gait),
+}
+
+impl LeggedPlanner {
+    /// `free` or `rrt` (with `tripod` or `wave`), as on the command line.
+    pub fn parse(planner: &str, gait: Option<&str>) -> Result<Self, String> {
+        match (planner, gait) {
+            ("free", None) => Ok(LeggedPlanner::FreeGait),
+            ("free", Some(g)) => Err(format!(
+                "the free gait chooses its own leg order; a gait ({g}) is for --planner rrt"
+            )),
+            ("rrt", g) => tca_rrt::Gait::from_name(g.unwrap_or("tripod"))
+                .map(LeggedPlanner::Rrt)
+                .map_err(|e| e.to_string()),
+            (other, _) => Err(format!(
+                "no planner named {other:?}: the planners are free (the free gait) and rrt (RRT-Connect)"
+            )),
+        }
+    }
+
+    /// For people: `free gait` or `RRT-Connect (tripod gait)`.
+    pub fn describe(&self) -> String {
+        match self {
+            LeggedPlanner::FreeGait => "free gait".to_owned(),
+            LeggedPlanner::Rrt(g) => format!("RRT-Connect ({} gait)", g.name()),
+        }
+    }
 }
 
 impl LeggedSetup {
@@ -104,6 +143,16 @@ pub async fn connect_module(
                 config.ground_truth = Some(setup.terrain.clone());
             } else {
                 config = config.with_map_allowance();
+            }
+            if let LeggedPlanner::Rrt(gait) = setup.planner {
+                config.planner = crate::gait_module::StepPlanner::Rrt {
+                    terrain: setup.terrain.clone(),
+                    params: tca_rrt::RrtParams {
+                        gait,
+                        seed: setup.seed,
+                        ..tca_rrt::RrtParams::default()
+                    },
+                };
             }
             crate::gait_module::connect(connector, config).await
         }

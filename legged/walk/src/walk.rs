@@ -19,10 +19,10 @@ use tca_module::{Connector, Module};
 use tokio::sync::mpsc;
 
 use crate::check::check_states;
-use crate::messages::StepPlanned;
+use crate::messages::{RoutePlanned, StepPlanned};
 use crate::picture;
-use crate::report::{LeggedWalkReport, StateRecord};
-use crate::system::{LeggedSetup, connect_all};
+use crate::report::{LeggedWalkReport, RouteSummary, StateRecord};
+use crate::system::{LeggedPlanner, LeggedSetup, connect_all};
 use crate::terrain::{LeggedTerrain, check_place, footprint_radius};
 
 /// A walk is over at the latest after this much wall time.
@@ -58,6 +58,8 @@ pub struct LeggedWalkOptions {
     pub connect: Option<String>,
     /// Hardware faults the simulated Controller injects (none by default).
     pub faults: Vec<InjectedFault>,
+    /// What plans the steps (the free gait by default).
+    pub planner: LeggedPlanner,
 }
 
 impl LeggedWalkOptions {
@@ -75,6 +77,7 @@ impl LeggedWalkOptions {
             out: None,
             connect: None,
             faults: Vec::new(),
+            planner: LeggedPlanner::FreeGait,
         }
     }
 }
@@ -108,6 +111,7 @@ pub fn load_robot(name_or_path: &str) -> anyhow::Result<(RobotModel, String)> {
 struct Collected {
     states: Vec<StateRecord>,
     steps: Vec<StepPlanned>,
+    routes: Vec<RoutePlanned>,
 }
 
 /// A walk's robot, terrain, start and goal, loaded and checked: what the walker and each of
@@ -184,6 +188,7 @@ pub fn prepare(options: &LeggedWalkOptions) -> anyhow::Result<Prepared> {
         seed: options.seed,
         ground_truth: options.ground_truth,
         faults: options.faults.clone(),
+        planner: options.planner,
     };
     Ok(Prepared {
         setup,
@@ -262,7 +267,7 @@ pub async fn walk(
     };
 
     let collected = Arc::new(Mutex::new(Collected::default()));
-    let (c1, c2) = (collected.clone(), collected.clone());
+    let (c1, c2, c3) = (collected.clone(), collected.clone(), collected.clone());
     let progress_for_steps = progress.clone();
     let walker = Module::builder(format!("legged-walker-{}", std::process::id()))
         .simulated_time(true)
@@ -277,6 +282,10 @@ pub async fn walk(
         .handle(move |_ctx, s: StepPlanned| {
             lock(&c2).steps.push(s.clone());
             let _ = progress_for_steps.send(Progress::Step(s));
+            async { Ok(()) }
+        })
+        .handle(move |_ctx, r: RoutePlanned| {
+            lock(&c3).routes.push(r);
             async { Ok(()) }
         })
         .connect(&connector)
@@ -306,9 +315,13 @@ pub async fn walk(
     let distance_to_goal_m = (body.x_m - goal[0]).hypot(body.y_m - goal[1]);
     // The last informs are delivered before the walk's outcome, but give them a moment.
     tokio::time::sleep(Duration::from_millis(20)).await;
-    let (states, steps) = {
+    let (states, steps, routes) = {
         let mut c = lock(&collected);
-        (std::mem::take(&mut c.states), std::mem::take(&mut c.steps))
+        (
+            std::mem::take(&mut c.states),
+            std::mem::take(&mut c.steps),
+            std::mem::take(&mut c.routes),
+        )
     };
     let (reached, reason) = match outcome {
         TaskOutcome::Achieved if distance_to_goal_m <= tolerance_m => (true, None),
@@ -364,6 +377,8 @@ pub async fn walk(
             })
             .collect(),
         state_problems: Vec::new(),
+        planner: options.planner.describe(),
+        routes: routes.iter().map(RouteSummary::from).collect(),
         outputs: Vec::new(),
     };
     report.state_problems = check_states(&report.states, &field)
@@ -390,6 +405,13 @@ pub async fn walk(
             .write_png(&map)
             .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", map.display()))?;
         report.outputs.push(map);
+        if let Some(route) = routes.last() {
+            let path = dir.join("rrt.png");
+            picture::route_picture(&field, crate::system::foot_radius(&model), route)
+                .write_png(&path)
+                .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
+            report.outputs.push(path);
+        }
         let json = dir.join("report.json");
         report.outputs.push(json.clone());
         std::fs::write(&json, serde_json::to_vec_pretty(&report)?)

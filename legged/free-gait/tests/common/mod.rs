@@ -103,6 +103,7 @@ impl Executor {
         match action {
             Action::Body { target } => self.body(state, target),
             Action::Swing { leg, waypoints, .. } => self.swing(state, *leg, waypoints),
+            Action::Reach { .. } => Err("the free gait never leaves a foot in the air".into()),
         }
     }
 
