@@ -4,7 +4,9 @@
 
 mod common;
 
-use tca_legged_walk::{LeggedTerrain, LeggedWalkOptions, LeggedWalkReport, check_states};
+use tca_legged_walk::{
+    LeggedPlanner, LeggedTerrain, LeggedWalkOptions, LeggedWalkReport, check_states,
+};
 use tca_robot::HeightField;
 use tokio::sync::mpsc;
 
@@ -181,6 +183,61 @@ async fn an_impossible_goal_ends_with_the_reason_and_no_fall() {
     assert!(report.states.iter().all(|s| s.body[0] < 12.0));
 }
 
+/// The integrated RRT-Connect planner walks the hexapod across the walls course: over the
+/// 15 cm wall, never over the 35 cm one, round the steep hill, safely, with its plan in the
+/// report and its trees in a picture.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn rrt_connect_walks_the_hexapod_over_the_low_wall_and_round_the_hill() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let report = walk(LeggedWalkOptions {
+        planner: LeggedPlanner::Rrt(tca_rrt::Gait::Tripod),
+        out: Some(dir.path().to_path_buf()),
+        ..options("hexapod", "hexapod-walls", 2)
+    })
+    .await;
+    assert_safe_arrival(&report, &course_terrain("hexapod-walls", 2));
+    let walls = report.walls.expect("the walls course is checked");
+    assert!(walls.as_intended(), "{}", walls.describe());
+    assert!(report.planner.contains("RRT-Connect"), "{}", report.planner);
+    let first = report.routes.first().expect("a plan in the report");
+    assert!(first.postures > 10 && first.nodes > 0, "{first:?}");
+    assert!(dir.path().join("rrt.png").is_file());
+}
+
+/// A goal behind a wall too high to climb, across the whole terrain: the planner says there
+/// is no way, and the robot is left standing.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn rrt_connect_ends_a_walk_to_an_unreachable_goal_with_the_reason() {
+    // The walls course's extent, level, with a 35 cm wall across it.
+    let course = course_terrain("hexapod-walls", 1);
+    let (lo, _) = course.extent();
+    let grid = course.grid();
+    let (nx, ny, cell) = (grid.nx(), grid.ny(), grid.resolution_m());
+    let heights = (0..ny)
+        .flat_map(|_| (0..nx).map(move |ix| lo.x + ix as f64 * cell))
+        .map(|x| if (2.5..2.6).contains(&x) { 0.35 } else { 0.0 })
+        .collect();
+    let walled = HeightField::new(lo, cell, nx, ny, heights).expect("a terrain");
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let file = dir.path().join("wall.asc");
+    tca_robot::terrain::asc::write_height_field(&file, &walled).expect("written");
+    let report = walk(LeggedWalkOptions {
+        terrain: Some(LeggedTerrain::File(file)),
+        start: Some([0.5, 0.0, 0.0]),
+        goal: Some([4.5, 0.0]),
+        planner: LeggedPlanner::Rrt(tca_rrt::Gait::Tripod),
+        ..LeggedWalkOptions::new("hexapod")
+    })
+    .await;
+    print!("{}", report.summary());
+    assert!(!report.reached);
+    let reason = report.reason.clone().expect("a reason");
+    assert!(reason.contains("no path"), "{reason}");
+    assert_eq!(report.falls, 0);
+    assert_eq!(report.collisions, 0);
+    assert!(report.states.iter().all(|s| s.body[0] < 2.5));
+}
+
 /// A leg whose drives die mid-walk: the Controller refuses the next command that would move
 /// it and raises `legged.hardwareFault`; the walk halts standing with the leg in the reason,
 /// and nothing moved after the fault.
@@ -349,6 +406,26 @@ fn bad_robots_terrains_starts_and_goals_are_refused_with_what_to_do() {
         (
             &["walk", "--fault", "slip@2", "--fault", "slip@3"],
             "one --fault",
+        ),
+        (
+            &["walk", "--robot", "hexapod", "--planner", "astar"],
+            "free (the free gait) and rrt",
+        ),
+        (
+            &[
+                "walk",
+                "--robot",
+                "hexapod",
+                "--planner",
+                "rrt",
+                "--gait",
+                "gallop",
+            ],
+            "gallop",
+        ),
+        (
+            &["walk", "--robot", "hexapod", "--gait", "wave"],
+            "--planner rrt",
         ),
     ];
     for (args, needle) in cases {

@@ -69,7 +69,8 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         let ok = report.reached
             && report.falls == 0
             && report.collisions == 0
-            && report.state_problems.is_empty();
+            && report.state_problems.is_empty()
+            && report.walls.is_none_or(|w| w.as_intended());
         clean += usize::from(ok);
         println!(
             "seed {seed}: {} in {} steps, {} falls, {} collisions, least margin {}, {} inconsistent states, {:.2} m from the goal, planning {:.1} ms per step, simulated {:.0} s, wall {:.1} s{}",
@@ -95,6 +96,9 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
                 .map(|r| format!(": {r}"))
                 .unwrap_or_default()
         );
+        if let Some(w) = &report.walls {
+            println!("  {}", w.describe());
+        }
         if args.json {
             println!("{}", serde_json::to_string(&report)?);
         }

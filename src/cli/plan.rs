@@ -8,7 +8,8 @@ use std::sync::Arc;
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
 use serde_json::json;
-use tca_legged_courses::{Course, walls};
+use tca_legged_courses::Course;
+use tca_legged_courses::walls::WallsChecks;
 use tca_legged_model::RobotModel;
 use tca_rrt::nalgebra::Point2;
 use tca_rrt::tca_robot::HeightField;
@@ -206,54 +207,9 @@ fn run_rrt(args: RrtArgs) -> anyhow::Result<ExitCode> {
     })
 }
 
-/// What a plan across `hexapod-walls` does at its landmarks.
-struct WallsChecks {
-    over_low_wall: bool,
-    over_high_wall: bool,
-    nearest_to_hill_m: f64,
-}
-
-impl WallsChecks {
-    fn describe(&self) -> String {
-        format!(
-            "crosses the 15 cm wall: {}, the 35 cm wall: {}, nearest the steep hill's top {:.2} m",
-            yes(self.over_low_wall),
-            yes(self.over_high_wall),
-            self.nearest_to_hill_m
-        )
-    }
-}
-
-fn yes(b: bool) -> &'static str {
-    if b { "yes" } else { "no" }
-}
-
 fn walls_checks(plan: &Plan) -> WallsChecks {
-    let (mut low, mut high) = (false, false);
-    for w in plan.postures.windows(2) {
-        let (a, b) = (w[0].body.xy(), w[1].body.xy());
-        let (x0, x1) = walls::WALL_X_M;
-        let on_or_across = (a.x < x1 && b.x >= x0) || (b.x < x1 && a.x >= x0);
-        if on_or_across {
-            if a.y.max(b.y) >= walls::WALL_SPLIT_Y_M {
-                high = true;
-            } else {
-                low = true;
-            }
-        }
-    }
-    let (hill, _, _) = walls::STEEP_HILL;
-    let hill = Point2::new(hill[0], hill[1]);
-    let nearest = plan
-        .postures
-        .iter()
-        .map(|q| (q.body.xy() - hill).norm())
-        .fold(f64::INFINITY, f64::min);
-    WallsChecks {
-        over_low_wall: low,
-        over_high_wall: high,
-        nearest_to_hill_m: nearest,
-    }
+    let path: Vec<[f64; 2]> = plan.postures.iter().map(|q| [q.body.x, q.body.y]).collect();
+    WallsChecks::of_path(&path)
 }
 
 fn plan_json(seed: u64, plan: &Plan, checks: Option<&WallsChecks>) -> serde_json::Value {

@@ -60,6 +60,65 @@ fn protected(p: Point2<f64>, r: f64) -> bool {
         || (p - Point2::new(hill[0], hill[1])).norm() < hr + r
 }
 
+/// What a body path across `hexapod-walls` does at the course's landmarks.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct WallsChecks {
+    /// The path crosses (or stands on) the wall south of [`WALL_SPLIT_Y_M`]: the 15 cm one.
+    pub over_low_wall: bool,
+    /// The path crosses (or stands on) the wall north of it: the 35 cm one.
+    pub over_high_wall: bool,
+    /// The least horizontal distance from the path to the steep hill's top, metres.
+    pub nearest_to_hill_m: f64,
+}
+
+impl WallsChecks {
+    /// Checks a body path, world `[x, y]` in metres, point by point (segments between
+    /// consecutive points count as crossed).
+    pub fn of_path(path: &[[f64; 2]]) -> WallsChecks {
+        let (mut low, mut high) = (false, false);
+        let (x0, x1) = WALL_X_M;
+        for w in path.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let on_or_across = (a[0] < x1 && b[0] >= x0) || (b[0] < x1 && a[0] >= x0);
+            if on_or_across {
+                if a[1].max(b[1]) >= WALL_SPLIT_Y_M {
+                    high = true;
+                } else {
+                    low = true;
+                }
+            }
+        }
+        let ([hx, hy], _, _) = STEEP_HILL;
+        let nearest = path
+            .iter()
+            .map(|p| (p[0] - hx).hypot(p[1] - hy))
+            .fold(f64::INFINITY, f64::min);
+        WallsChecks {
+            over_low_wall: low,
+            over_high_wall: high,
+            nearest_to_hill_m: nearest,
+        }
+    }
+
+    /// Whether the path does what the course asks: over the low wall, never over the
+    /// high one, and round the steep hill (never over its top half, within its radius).
+    pub fn as_intended(&self) -> bool {
+        let (_, radius, _) = STEEP_HILL;
+        self.over_low_wall && !self.over_high_wall && self.nearest_to_hill_m > radius
+    }
+
+    /// For people.
+    pub fn describe(&self) -> String {
+        let yes = |b: bool| if b { "yes" } else { "no" };
+        format!(
+            "crosses the 15 cm wall: {}, the 35 cm wall: {}, nearest the steep hill's top {:.2} m",
+            yes(self.over_low_wall),
+            yes(self.over_high_wall),
+            self.nearest_to_hill_m
+        )
+    }
+}
+
 /// Builds the course from `seed`.
 pub(crate) fn walls(seed: u64) -> Result<HeightField, TerrainError> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5741_4c4c_5352_5254);

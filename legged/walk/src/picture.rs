@@ -100,26 +100,45 @@ pub fn map_picture(terrain: &HeightField, report: &LeggedWalkReport) -> Canvas {
     c
 }
 
-/// The RRT-Connect planner's plan over the terrain: both trees, the path and the planned
-/// footholds (see `tca_rrt::draw_route`), at 100 pixels a metre or less for a large
+/// The RRT-Connect planner's plans of a walk over the terrain: every plan's trees, path
+/// and footholds (see `tca_rrt::draw_route`), at 100 pixels a metre or less for a large
 /// terrain.
 pub fn route_picture(
     terrain: &std::sync::Arc<HeightField>,
     foot_radius_m: f64,
-    route: &crate::messages::RoutePlanned,
+    routes: &[crate::messages::RoutePlanned],
 ) -> Canvas {
     use tca_rrt::nalgebra::Point2;
-    let edges = |e: &[[f64; 4]]| -> Vec<(Point2<f64>, Point2<f64>)> {
-        e.iter()
-            .map(|v| (Point2::new(v[0], v[1]), Point2::new(v[2], v[3])))
-            .collect()
+    let p = |x: f64, y: f64| Point2::new(x, y);
+    let edges = |pick: fn(&crate::messages::RoutePlanned) -> &Vec<[f64; 4]>| {
+        routes
+            .iter()
+            .flat_map(|r| pick(r).iter().map(|v| (p(v[0], v[1]), p(v[2], v[3]))))
+            .collect::<Vec<_>>()
     };
-    let (start_tree, goal_tree) = (edges(&route.start_tree), edges(&route.goal_tree));
-    let path: Vec<Point2<f64>> = route.path.iter().map(|p| Point2::new(p[0], p[1])).collect();
-    let footholds: Vec<Point2<f64>> = route
-        .footholds
+    let (start_tree, goal_tree) = (edges(|r| &r.start_tree), edges(|r| &r.goal_tree));
+    // Each plan's path up to where the next plan starts.
+    let mut path: Vec<Point2<f64>> = Vec::new();
+    for r in routes {
+        let from = r.path.first().map(|q| p(q[0], q[1]));
+        if let Some(from) = from {
+            let cut = path
+                .iter()
+                .enumerate()
+                .min_by(|a, b| {
+                    (a.1 - from)
+                        .norm()
+                        .partial_cmp(&(b.1 - from).norm())
+                        .unwrap_or(std::cmp::Ordering::Equal)
+                })
+                .map_or(0, |(i, _)| i);
+            path.truncate(cut);
+        }
+        path.extend(r.path.iter().map(|q| p(q[0], q[1])));
+    }
+    let footholds: Vec<Point2<f64>> = routes
         .iter()
-        .map(|p| Point2::new(p[0], p[1]))
+        .flat_map(|r| r.footholds.iter().map(|f| p(f[0], f[1])))
         .collect();
     let (lo, hi) = terrain.extent();
     let pixels_per_m = (MAP_PX / (hi.x - lo.x).max(hi.y - lo.y).max(1e-6)).min(100.0);

@@ -139,6 +139,10 @@ pub struct LeggedWalkReport {
     /// move); empty for the free gait.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub routes: Vec<RouteSummary>,
+    /// On the `hexapod-walls` course: what the body's path did at the walls and the steep
+    /// hill.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub walls: Option<tca_legged_courses::walls::WallsChecks>,
     /// Files written.
     pub outputs: Vec<PathBuf>,
 }
@@ -190,6 +194,20 @@ impl LeggedWalkReport {
                 self.state_problems.len(),
                 self.state_problems[0]
             );
+        }
+        if let Some(r) = self.routes.first() {
+            s += &format!(
+                "  planned by {}: {} plan(s), the first {} postures over {:.2} m from {} nodes in {:.0} ms\n",
+                self.planner,
+                self.routes.len(),
+                r.postures,
+                r.length_m,
+                r.nodes,
+                r.planning_ms
+            );
+        }
+        if let Some(w) = &self.walls {
+            s += &format!("  {}\n", w.describe());
         }
         for o in &self.outputs {
             s += &format!("  wrote {}\n", o.display());

@@ -379,8 +379,18 @@ pub async fn walk(
         state_problems: Vec::new(),
         planner: options.planner.describe(),
         routes: routes.iter().map(RouteSummary::from).collect(),
+        walls: None,
         outputs: Vec::new(),
     };
+    if matches!(&options.terrain, Some(LeggedTerrain::Course { name, .. }) if name == "hexapod-walls")
+    {
+        let path: Vec<[f64; 2]> = report
+            .states
+            .iter()
+            .map(|s| [s.body[0], s.body[1]])
+            .collect();
+        report.walls = Some(tca_legged_courses::walls::WallsChecks::of_path(&path));
+    }
     report.state_problems = check_states(&report.states, &field)
         .iter()
         .map(ToString::to_string)
@@ -405,9 +415,9 @@ pub async fn walk(
             .write_png(&map)
             .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", map.display()))?;
         report.outputs.push(map);
-        if let Some(route) = routes.last() {
+        if !routes.is_empty() {
             let path = dir.join("rrt.png");
-            picture::route_picture(&field, crate::system::foot_radius(&model), route)
+            picture::route_picture(&field, crate::system::foot_radius(&model), &routes)
                 .write_png(&path)
                 .map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))?;
             report.outputs.push(path);
