@@ -196,6 +196,10 @@ async fn rrt_connect_walks_the_hexapod_over_the_low_wall_and_round_the_hill() {
     })
     .await;
     assert_safe_arrival(&report, &course_terrain("hexapod-walls", 2));
+    assert_eq!(
+        report.self_collisions, 0,
+        "no two parts of the robot touched"
+    );
     let walls = report.walls.expect("the walls course is checked");
     assert!(walls.as_intended(), "{}", walls.describe());
     assert!(report.planner.contains("RRT-Connect"), "{}", report.planner);

@@ -69,11 +69,12 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         let ok = report.reached
             && report.falls == 0
             && report.collisions == 0
+            && report.self_collisions == 0
             && report.state_problems.is_empty()
             && report.walls.is_none_or(|w| w.as_intended());
         clean += usize::from(ok);
         println!(
-            "seed {seed}: {} in {} steps, {} falls, {} collisions, least margin {}, {} inconsistent states, {:.2} m from the goal, planning {:.1} ms per step, simulated {:.0} s, wall {:.1} s{}",
+            "seed {seed}: {} in {} steps, {} falls, {} collisions, {} self-collisions, least margin {}, {} inconsistent states, {:.2} m from the goal, planning {:.1} ms per step, simulated {:.0} s, wall {:.1} s{}",
             if report.reached {
                 "reached"
             } else {
@@ -82,6 +83,7 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
             report.steps,
             report.falls,
             report.collisions,
+            report.self_collisions,
             report
                 .min_stability_margin_m
                 .map_or("-".into(), |m| format!("{m:.3} m")),
@@ -104,7 +106,7 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         }
     }
     println!(
-        "{clean} of {total} walks reached the goal with no fall, no collision and every state consistent"
+        "{clean} of {total} walks reached the goal with no fall, no collision of any kind and every state consistent"
     );
     Ok(if clean == total {
         ExitCode::SUCCESS

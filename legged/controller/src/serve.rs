@@ -111,6 +111,7 @@ pub async fn connect(
                     clock_s: state.sim.clock_s(),
                     falls: c.falls,
                     collisions: c.collisions,
+                    self_collisions: c.self_collisions,
                     fallen: state.sim.fallen(),
                     moves: c.moves,
                 }

@@ -67,6 +67,8 @@ pub struct LeggedStatusReply {
     /// Contacts of a link (not a foot's sphere) with the terrain so far, and feet driven into
     /// the ground.
     pub collisions: u32,
+    /// Moves so far during which parts of the robot touched each other.
+    pub self_collisions: u32,
     /// Whether the robot lies tipped over (it then refuses every move).
     pub fallen: bool,
     /// Leg moves and body moves carried out so far.

@@ -2,7 +2,7 @@
 //! by the triangle-area test over a support polygon shrunk toward its centre, no leg
 //! touching another leg or the body, no link in the terrain.
 
-use nalgebra::{Isometry3, Point2, Point3};
+use nalgebra::{Isometry3, Point2};
 use tca_stability::Polygon;
 
 use crate::robot::Robot;
@@ -64,101 +64,15 @@ pub fn margin(feet: &[Point2<f64>], p: Point2<f64>) -> f64 {
     Polygon::convex_hull(feet).map_or(f64::NEG_INFINITY, |h| h.signed_distance(p))
 }
 
-/// The closest distance between segments `a0 a1` and `b0 b1`.
-pub fn segment_distance(a0: Point3<f64>, a1: Point3<f64>, b0: Point3<f64>, b1: Point3<f64>) -> f64 {
-    let (d1, d2, r) = (a1 - a0, b1 - b0, a0 - b0);
-    let (a, e, f) = (d1.dot(&d1), d2.dot(&d2), d2.dot(&r));
-    let eps = 1e-12;
-    let (s, t);
-    if a <= eps && e <= eps {
-        return r.norm();
+/// The first collision between parts of the robot in a posture (joint positions per leg):
+/// two legs' links whose bounding capsules overlap, or a leg's link beyond its first joint
+/// inside the body's box (`tca_legged_model::RobotModel::self_contact`). `None` when there
+/// is none.
+pub fn self_collision(robot: &Robot, joints: &[Vec<f64>]) -> Option<String> {
+    match robot.model().self_contact(joints) {
+        Ok(contact) => contact.map(|c| c.to_string()),
+        Err(e) => Some(e.to_string()),
     }
-    if a <= eps {
-        s = 0.0;
-        t = (f / e).clamp(0.0, 1.0);
-    } else {
-        let c = d1.dot(&r);
-        if e <= eps {
-            t = 0.0;
-            s = (-c / a).clamp(0.0, 1.0);
-        } else {
-            let b = d1.dot(&d2);
-            let denom = a * e - b * b;
-            let mut s0 = if denom > eps {
-                ((b * f - c * e) / denom).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let mut t0 = (b * s0 + f) / e;
-            if t0 < 0.0 {
-                t0 = 0.0;
-                s0 = (-c / a).clamp(0.0, 1.0);
-            } else if t0 > 1.0 {
-                t0 = 1.0;
-                s0 = ((b - c) / a).clamp(0.0, 1.0);
-            }
-            s = s0;
-            t = t0;
-        }
-    }
-    ((a0 + d1 * s) - (b0 + d2 * t)).norm()
-}
-
-/// A leg (or the body), a segment's two ends and a radius.
-type Capsule = (Option<usize>, Point3<f64>, Point3<f64>, f64);
-
-/// The first collision between parts of the robot in a posture: two legs' links closer
-/// than their capsules allow, or a leg's link inside the body's box (the first joint's
-/// link, which is fixed to the body, excepted). `None` when there is none.
-pub fn self_collision(robot: &Robot, poses: &[Isometry3<f64>], clearance: f64) -> Option<String> {
-    let capsules: Vec<Capsule> = robot
-        .probes
-        .iter()
-        .zip(poses)
-        .map(|(p, pose)| (p.leg, pose * p.capsule.0, pose * p.capsule.1, p.capsule.2))
-        .collect();
-    for (i, a) in capsules.iter().enumerate() {
-        let Some(la) = a.0 else { continue };
-        for (j, b) in capsules.iter().enumerate().skip(i + 1) {
-            let Some(lb) = b.0 else { continue };
-            if la == lb {
-                continue;
-            }
-            let d = segment_distance(a.1, a.2, b.1, b.2);
-            if d < a.3 + b.3 + clearance {
-                return Some(format!(
-                    "links `{}` and `{}` come {:.3} m apart",
-                    robot.probes[i].link, robot.probes[j].link, d
-                ));
-            }
-        }
-    }
-    // Leg links against the body's box, in the body frame.
-    let body_pose = robot
-        .probes
-        .iter()
-        .zip(poses)
-        .find(|(p, _)| p.leg.is_none())
-        .map(|(p, pose)| (pose, p));
-    let (body_world, _) = body_pose?;
-    let body_inv = body_world.inverse();
-    for (probe, pose) in robot.probes.iter().zip(poses) {
-        let Some(leg) = probe.leg else { continue };
-        if robot.model().link(&probe.link).map(|l| l.stage()) == Some(1) {
-            continue;
-        }
-        for (pt, r) in &probe.points {
-            let local = body_inv * (pose * pt) - robot.body_centre;
-            let h = robot.body_half;
-            if local.x.abs() < h.x + r && local.y.abs() < h.y + r && local.z.abs() < h.z + r {
-                return Some(format!(
-                    "link `{}` of leg {leg} enters the body",
-                    probe.link
-                ));
-            }
-        }
-    }
-    None
 }
 
 /// The first link of the robot below the ground in a posture (every collision shape's
@@ -232,32 +146,5 @@ mod tests {
             }
         }
 
-        #[test]
-        fn segment_distance_is_symmetric_and_bounded(a in prop::array::uniform3(-1.0..1.0f64), b in prop::array::uniform3(-1.0..1.0f64), c in prop::array::uniform3(-1.0..1.0f64), d in prop::array::uniform3(-1.0..1.0f64)) {
-            let (a, b, c, d) = (Point3::from(a), Point3::from(b), Point3::from(c), Point3::from(d));
-            let s = segment_distance(a, b, c, d);
-            prop_assert!((s - segment_distance(c, d, a, b)).abs() < 1e-9);
-            // Never more than the distance between any two end points nor less than zero.
-            prop_assert!(s <= (a - c).norm() + 1e-9 && s <= (b - d).norm() + 1e-9);
-            // No sampled pair of points is closer.
-            for i in 0..=10 {
-                for j in 0..=10 {
-                    let p = a + (b - a) * (f64::from(i) / 10.0);
-                    let q = c + (d - c) * (f64::from(j) / 10.0);
-                    prop_assert!(s <= (p - q).norm() + 1e-9);
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn crossing_segments_are_at_zero() {
-        let d = segment_distance(
-            Point3::new(-1.0, 0.0, 0.0),
-            Point3::new(1.0, 0.0, 0.0),
-            Point3::new(0.0, -1.0, 0.0),
-            Point3::new(0.0, 1.0, 0.0),
-        );
-        assert!(d.abs() < 1e-12);
     }
 }

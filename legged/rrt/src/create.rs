@@ -150,7 +150,7 @@ pub fn create_posture(
     let poses = robot
         .shape_poses(&iso, &joints)
         .ok_or(Refusal::NoFoothold)?;
-    if self_collision(robot, &poses, 0.0).is_some() {
+    if self_collision(robot, &joints).is_some() {
         return Err(Refusal::SelfCollision);
     }
     if terrain_collision(robot, terrain, &poses, 0.0).is_some() {

@@ -5,19 +5,15 @@
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point3, Vector3};
-use tca_legged_model::{IkOptions, RobotModel, Shape};
+use tca_legged_model::{IkOptions, RobotModel};
 
 use crate::error::PlanError;
 
 /// A collision shape as the checks see it, in its own frame.
 #[derive(Debug, Clone)]
 pub(crate) struct ShapeProbe {
-    /// The leg the shape moves with, `None` for the body.
-    pub leg: Option<usize>,
     /// The shape's link.
     pub link: String,
-    /// The capsule's end points and radius (shape frame) that bound the shape.
-    pub capsule: (Point3<f64>, Point3<f64>, f64),
     /// Points over the shape and the radius each stands for (shape frame).
     pub points: Vec<(Point3<f64>, f64)>,
     /// The radius of the ball about the shape's centre that holds it.
@@ -91,17 +87,15 @@ impl Robot {
         for s in &shapes {
             let leg = model.link(s.link).and_then(|l| l.leg());
             if leg.is_none() {
-                for p in surface_points(&s.shape, 0.5) {
+                for p in s.shape.surface_points(0.5) {
                     let w = s.pose * p.0;
                     lo = lo.inf(&w.coords);
                     hi = hi.sup(&w.coords);
                 }
             }
             probes.push(ShapeProbe {
-                leg,
                 link: s.link.to_owned(),
-                capsule: capsule_of(&s.shape),
-                points: surface_points(&s.shape, 0.01),
+                points: s.shape.surface_points(0.01),
                 bounding_radius: s.shape.bounding_radius(),
             });
         }
@@ -223,85 +217,6 @@ impl Robot {
     ) -> Option<Vec<Isometry3<f64>>> {
         let shapes = self.model.collision_shapes(joints).ok()?;
         Some(shapes.iter().map(|s| body * s.pose).collect())
-    }
-}
-
-/// The capsule along a shape's longest axis that holds it.
-fn capsule_of(shape: &Shape) -> (Point3<f64>, Point3<f64>, f64) {
-    match *shape {
-        Shape::Sphere { radius } => (Point3::origin(), Point3::origin(), radius),
-        Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
-            let h = length / 2.0;
-            (Point3::new(0.0, 0.0, -h), Point3::new(0.0, 0.0, h), radius)
-        }
-        Shape::Box { size } => {
-            let axis = if size.x >= size.y && size.x >= size.z {
-                0
-            } else if size.y >= size.z {
-                1
-            } else {
-                2
-            };
-            let mut a = Point3::origin();
-            let mut b = Point3::origin();
-            let mut across = 0.0_f64;
-            for k in 0..3 {
-                if k == axis {
-                    a[k] = -size[k] / 2.0;
-                    b[k] = size[k] / 2.0;
-                } else {
-                    across += (size[k] / 2.0).powi(2);
-                }
-            }
-            // The box's half length shrinks the ends in by its cross-section's radius.
-            let r = across.sqrt();
-            let shrink = r.min(size[axis] / 2.0);
-            a[axis] += shrink;
-            b[axis] -= shrink;
-            (a, b, r)
-        }
-    }
-}
-
-/// Points over a shape every `spacing` or closer, each with the radius of the ball about
-/// it that the checks keep clear of the ground: for a box, a lattice over its surface
-/// (radius 0); for a cylinder or capsule, points along its axis (its radius); for a
-/// sphere, its centre (its radius).
-fn surface_points(shape: &Shape, spacing: f64) -> Vec<(Point3<f64>, f64)> {
-    let steps = |len: f64| ((len / spacing).ceil() as usize).clamp(1, 40);
-    match *shape {
-        Shape::Sphere { radius } => vec![(Point3::origin(), radius)],
-        Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
-            let n = steps(length);
-            (0..=n)
-                .map(|i| {
-                    let z = -length / 2.0 + length * i as f64 / n as f64;
-                    (Point3::new(0.0, 0.0, z), radius)
-                })
-                .collect()
-        }
-        Shape::Box { size } => {
-            let (nx, ny, nz) = (steps(size.x), steps(size.y), steps(size.z));
-            let mut out = Vec::new();
-            for i in 0..=nx {
-                for j in 0..=ny {
-                    for k in 0..=nz {
-                        let on_face = i == 0 || i == nx || j == 0 || j == ny || k == 0 || k == nz;
-                        if on_face {
-                            out.push((
-                                Point3::new(
-                                    -size.x / 2.0 + size.x * i as f64 / nx as f64,
-                                    -size.y / 2.0 + size.y * j as f64 / ny as f64,
-                                    -size.z / 2.0 + size.z * k as f64 / nz as f64,
-                                ),
-                                0.0,
-                            ));
-                        }
-                    }
-                }
-            }
-            out
-        }
     }
 }
 

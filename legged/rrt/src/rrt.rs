@@ -226,7 +226,7 @@ impl Planner {
             .robot
             .shape_poses(body, joints)
             .ok_or_else(|| "joint positions out of range".to_owned())?;
-        if let Some(why) = crate::checks::self_collision(&self.robot, &poses, 0.0) {
+        if let Some(why) = crate::checks::self_collision(&self.robot, joints) {
             return Err(why);
         }
         if let Some(why) =

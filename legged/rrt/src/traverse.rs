@@ -138,7 +138,7 @@ pub fn check_traverse(
             let poses = robot
                 .shape_poses(&iso, &joints)
                 .ok_or_else(|| Refusal::Move("joint positions out of range".to_owned()))?;
-            if let Some(why) = self_collision(robot, &poses, 0.0) {
+            if let Some(why) = self_collision(robot, &joints) {
                 return Err(Refusal::Move(why));
             }
             if let Some(why) = terrain_collision(robot, terrain, &poses, 0.0) {

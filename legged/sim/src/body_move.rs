@@ -144,6 +144,7 @@ impl LeggedSim {
             .unwrap_or(f64::NEG_INFINITY);
         // Carry it out, checking the terrain at every sample.
         let mut report = self.begin_move(min_margin);
+        let mut self_contact = false;
         for p in plan {
             report.samples += 1;
             let mut hits = self.link_contacts(&p.body, &p.posture, None);
@@ -155,6 +156,12 @@ impl LeggedSim {
                             .unwrap_or_else(|_| Point3::origin());
                     hits.push((leg.foot_link().to_owned(), at));
                 }
+            }
+            if !self_contact && let Ok(Some(contact)) = model.self_contact(&p.posture) {
+                // Counted once a move; the move goes on.
+                tracing::debug!(first = %contact.first, second = %contact.second, "parts of the robot touched");
+                self.counters.self_collisions += 1;
+                self_contact = true;
             }
             if let Some((link, at)) = hits.first().cloned() {
                 self.counters.collisions += hits.len() as u32;

@@ -244,6 +244,8 @@ impl LeggedSim {
         };
         let last = segments.len() - 1;
         let mut posture = self.posture.clone();
+        // Parts of the robot touching are counted once a move; the move goes on.
+        let mut self_contact = None;
         for (k, seg) in segments.iter().enumerate() {
             let in_transition = transition && k == last;
             let mut prev_f = 0.0;
@@ -255,6 +257,13 @@ impl LeggedSim {
                 let hits = self.link_contacts(&self.body, &posture, Some(i));
                 if !hits.is_empty() {
                     return Err(self.stop_on_collision(report, i, reached, hits));
+                }
+                if self_contact.is_none()
+                    && let Ok(Some(contact)) = self.model.self_contact(&posture)
+                {
+                    tracing::debug!(first = %contact.first, second = %contact.second, "parts of the robot touched");
+                    self.counters.self_collisions += 1;
+                    self_contact = Some(contact);
                 }
                 let clearance = self.clearance(&self.body, i, &q);
                 if in_transition && clearance <= 0.0 {

@@ -12,6 +12,9 @@ pub struct Counters {
     /// Contacts of link shapes (or of swinging feet driven into the ground) with the
     /// terrain: one per link found in contact when a move stopped.
     pub collisions: u32,
+    /// Moves during which parts of the robot touched (two legs' links, or a leg's link and
+    /// the body): counted once a move; the move is carried out.
+    pub self_collisions: u32,
     /// Leg and body moves carried out (wholly or until they stopped); refused ones are not
     /// counted.
     pub moves: u32,

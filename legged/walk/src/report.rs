@@ -104,6 +104,10 @@ pub struct LeggedWalkReport {
     pub falls: u32,
     /// Contacts of the robot's links with the terrain.
     pub collisions: u32,
+    /// Contacts between parts of the robot (two legs' links, or a leg's link and the
+    /// body).
+    #[serde(default)]
+    pub self_collisions: u32,
     /// The least stability margin over the recorded states, metres (`null` with no state).
     pub min_stability_margin_m: Option<f64>,
     /// Simulated time of the walk, seconds.
@@ -165,10 +169,11 @@ impl LeggedWalkReport {
             }
         );
         s += &format!(
-            "  {} steps, {} falls, {} collisions, least stability margin {}\n",
+            "  {} steps, {} falls, {} collisions, {} self-collisions, least stability margin {}\n",
             self.steps,
             self.falls,
             self.collisions,
+            self.self_collisions,
             self.min_stability_margin_m
                 .map_or("-".to_string(), |m| format!("{m:.3} m"))
         );

@@ -345,6 +345,7 @@ pub async fn walk(
         steps: steps.len(),
         falls: status.falls,
         collisions: status.collisions,
+        self_collisions: status.self_collisions,
         min_stability_margin_m: states.iter().map(|s| s.margin_m).reduce(f64::min),
         sim_time_s,
         wall_time_s: 0.0,
