@@ -11,8 +11,6 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use common::*;
-use serde::{Deserialize, Serialize};
-use tca_module::{Connector, Module};
 
 /// How long one command may take.
 const RUN: Duration = Duration::from_secs(30);
@@ -124,11 +122,6 @@ async fn carriage_y(endpoint: &str) -> f64 {
         .as_f64()
         .unwrap_or_else(|| panic!("no y_m: {out}"))
 }
-
-/// An emergency-stop receiver of the kind `tca stop` looks for: an inform named `halt`.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct Halt;
-tca_messages::message!(Halt: inform "halt");
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_walking_system_is_driven_by_hand() {
@@ -291,20 +284,8 @@ async fn the_walking_system_is_driven_by_hand() {
     let y2 = carriage_y(e).await;
     assert!((y2 - 1.5).abs() < 0.02, "the last move went to 1.5: {y2}");
 
-    // tca stop during a walk: the tree is killed, the walk's sender told, the halt sent.
-    let halts = Arc::new(Mutex::new(0u32));
-    let h = halts.clone();
-    let _estop = Module::builder("estop")
-        .handle(move |_ctx, _h: Halt| {
-            let h = h.clone();
-            async move {
-                *h.lock().unwrap() += 1;
-                Ok(())
-            }
-        })
-        .connect(&Connector::zenoh(endpoint.clone()))
-        .await
-        .unwrap();
+    // tca stop during a walk: the tree is killed, the walk's sender told, the Controller
+    // halted.
     let echo = Background::start(&[
         "echo",
         "bodyMove",
@@ -334,22 +315,33 @@ async fn the_walking_system_is_driven_by_hand() {
     assert!(tree.contains("walk"), "{tree}");
     let out = ok(e, &["stop"]).await;
     assert!(out.contains("killed 1 task tree"), "{out}");
-    assert!(out.contains("sent inform halt to estop"), "{out}");
+    assert!(
+        out.contains("command halt to controller: achieved"),
+        "{out}"
+    );
     let (status, out, err) = walk.finish().await;
     assert_eq!(status.code(), Some(3), "{out}\n{err}");
     let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
     assert_eq!(v["outcome"], "killed", "{v}");
     assert_eq!(v["class"], "goal", "{v}");
     assert!(ok(e, &["tree"]).await.contains("no live task nodes"));
-    retry("the halt arrived", || async {
-        match *halts.lock().unwrap() {
-            1 => Ok(()),
-            n => Err(format!("{n} halts")),
-        }
-    })
-    .await;
-    let (status, out, err) = tca_at(e, &["call", "bodyPosition", "{}"]).await;
-    assert!(status.success(), "after the stop: {out}\n{err}");
+    // Halted, the Controller still answers but moves nothing until resumed.
+    let y3 = carriage_y(e).await;
+    let (status, out, err) = tca_at(e, &["send", "bodyMove", r#"{"target_y_m": 2.0}"#]).await;
+    assert_eq!(status.code(), Some(2), "a move while halted: {out}\n{err}");
+    assert!(
+        out.contains("halted by an emergency stop") && out.contains("resume"),
+        "{out}"
+    );
+    assert_eq!(carriage_y(e).await, y3, "nothing moved while halted");
+    let out = ok(e, &["send", "resume", "{}"]).await;
+    assert!(out.contains("achieved"), "{out}");
+    ok(e, &["send", "bodyMove", r#"{"target_y_m": 2.0}"#]).await;
+    let y4 = carriage_y(e).await;
+    assert!(
+        (y4 - 2.0).abs() < 0.02,
+        "resumed, the move went to 2.0: {y4}"
+    );
     // Ctrl-C stops tca up and every module it started.
     up.0.interrupt_and_wait("tca up stops").await;
 }

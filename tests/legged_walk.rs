@@ -7,6 +7,7 @@ mod common;
 use tca_legged_walk::{
     LeggedPlanner, LeggedTerrain, LeggedWalkOptions, LeggedWalkReport, check_states,
 };
+use tca_logs::LogFile;
 use tca_robot::HeightField;
 use tokio::sync::mpsc;
 
@@ -33,6 +34,7 @@ fn assert_safe_arrival(report: &LeggedWalkReport, terrain: &HeightField) {
 fn assert_safe(report: &LeggedWalkReport, terrain: &HeightField) {
     assert_eq!(report.falls, 0, "{}", report.summary());
     assert_eq!(report.collisions, 0, "{}", report.summary());
+    assert_eq!(report.self_collisions, 0, "{}", report.summary());
     let least = report.min_stability_margin_m.expect("states were recorded");
     assert!(least > 0.0, "least margin {least}");
     assert!(
@@ -78,6 +80,15 @@ async fn the_ambler_crosses_the_boulder_field_on_its_own_map() {
     )
     .expect("report.json is a report");
     assert_eq!(written.states, report.states);
+    // The log holds the robot's description, so its Foxglove export shows the robot.
+    let log = LogFile::open(&dir.path().join("traffic.mcap")).expect("the walk's log");
+    let exported = dir.path().join("foxglove.mcap");
+    let summary = tca_foxglove::export_foxglove(&log, &exported).expect("an export");
+    assert_eq!(
+        summary.well_known.get("/robot_description"),
+        Some(&1),
+        "{summary:?}"
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

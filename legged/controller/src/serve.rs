@@ -4,8 +4,8 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
 use tca_legged_messages::{
-    BodyMove, BodyPose, FootContact, HardwareFault, LegMove, LegState, LeggedStatus,
-    LeggedStatusReply, RobotDescription, RobotModel, SupportState,
+    BodyMove, BodyPose, FootContact, Halt, HardwareFault, LegMove, LegState, LeggedStatus,
+    LeggedStatusReply, Resume, RobotDescription, RobotModel, SupportState,
 };
 use tca_legged_sim::{
     LeggedSim, MoveError, MoveException, MoveReport, isometry_to_pose, pose_to_isometry,
@@ -51,6 +51,7 @@ pub async fn connect(
             sim,
             commanded: false,
             faults: config.faults.clone(),
+            halted_at_s: None,
         })),
         turn: Arc::new(tokio::sync::Mutex::new(())),
     };
@@ -79,6 +80,30 @@ pub async fn connect(
                     s.command(&ctx, Moves::Standing, |sim| sim.body_move(&target))
                         .await
                 }
+            }
+        })
+        .handle({
+            let s = s.clone();
+            move |_ctx, _h: Halt| {
+                let mut state = s.lock();
+                if state.halted_at_s.is_none() {
+                    let at = state.sim.clock_s();
+                    state.halted_at_s = Some(at);
+                    tracing::warn!(
+                        at_s = at,
+                        "emergency stop: every move refused until legged.resume"
+                    );
+                }
+                async { Ok(()) }
+            }
+        })
+        .handle({
+            let s = s.clone();
+            move |_ctx, _r: Resume| {
+                if s.lock().halted_at_s.take().is_some() {
+                    tracing::info!("emergency stop lifted: moves carried out again");
+                }
+                async { Ok(()) }
             }
         })
         .handle(move |_ctx, _q: RobotModel| {
@@ -128,11 +153,28 @@ struct State {
     commanded: bool,
     /// Hardware faults to inject.
     faults: Vec<InjectedFault>,
+    /// When the emergency stop came (motion clock, seconds), until a resume.
+    halted_at_s: Option<f64>,
 }
 
 impl State {
-    /// The first injected fault active now on one of the legs a command moves.
+    /// The fault that refuses a command now: the emergency stop, or the first injected
+    /// fault active on one of the legs it moves.
     fn fault_for(&self, moves: &Moves) -> Option<HardwareFault> {
+        if let Some(at) = self.halted_at_s {
+            return Some(HardwareFault {
+                leg: None,
+                detail: format!(
+                    "the Controller is halted by an emergency stop (legged.halt at {at:.1} s of \
+                     motion); nothing was moved: send legged.resume to move again"
+                ),
+            });
+        }
+        self.injected_fault(moves)
+    }
+
+    /// The first injected fault active now on one of the legs a command moves.
+    fn injected_fault(&self, moves: &Moves) -> Option<HardwareFault> {
         let legs = match moves {
             Moves::Legs(legs) => legs.clone(),
             Moves::Standing => self.sim.standing_legs(),
@@ -189,7 +231,7 @@ impl Shared {
         let _turn = self.turn.lock().await;
         let fault = self.lock().fault_for(&moves);
         if let Some(fault) = fault {
-            tracing::warn!(leg = ?fault.leg, "injected hardware fault: a command refused");
+            tracing::warn!(leg = ?fault.leg, detail = %fault.detail, "a command refused");
             if let Err(r) = ctx.raise(&fault) {
                 tracing::warn!(error = %r, "could not raise the hardware fault");
             }

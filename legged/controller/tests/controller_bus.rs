@@ -7,8 +7,8 @@ use nalgebra::{Point2, Vector3};
 use serde::{Deserialize, Serialize};
 use tca_legged_controller::{LeggedControllerConfig, connect};
 use tca_legged_messages::{
-    BodyMove, BodyPose, FootContact, LegMove, LegState, LeggedStatus, MoveFailed, MoveFailureKind,
-    RobotModel as RobotModelQuery, SupportState,
+    BodyMove, BodyPose, FootContact, Halt, HardwareFault, LegMove, LegState, LeggedStatus,
+    MoveFailed, MoveFailureKind, Resume, RobotModel as RobotModelQuery, SupportState,
 };
 use tca_legged_model::{BUILTIN_ROBOTS, IkOptions, RobotModel};
 use tca_legged_sim::StartPose;
@@ -36,6 +36,7 @@ tca_messages::message!(Attempt: goal "test-legged-attempt");
 struct Client {
     module: Module,
     failures: mpsc::UnboundedReceiver<MoveFailed>,
+    faults: mpsc::UnboundedReceiver<HardwareFault>,
     contacts: mpsc::UnboundedReceiver<FootContact>,
     states: mpsc::UnboundedReceiver<SupportState>,
     outcomes: mpsc::UnboundedReceiver<TaskOutcome>,
@@ -44,12 +45,17 @@ struct Client {
 impl Client {
     async fn connect(connector: &tca_module::Connector) -> Client {
         let (ftx, failures) = mpsc::unbounded_channel();
+        let (htx, faults) = mpsc::unbounded_channel();
         let (ctx_, contacts) = mpsc::unbounded_channel();
         let (stx, states) = mpsc::unbounded_channel();
         let (otx, outcomes) = mpsc::unbounded_channel();
         let module = Module::builder("walker")
             .handle(move |_ctx, e: MoveFailed| {
                 let _ = ftx.send(e);
+                async { Ok(()) }
+            })
+            .handle(move |_ctx, e: HardwareFault| {
+                let _ = htx.send(e);
                 async { Ok(()) }
             })
             .handle(move |_ctx, c: FootContact| {
@@ -67,6 +73,7 @@ impl Client {
                         .node()
                         .ok_or_else(|| HandlerError::new("a goal has a node"))?;
                     ctx.on_exception::<MoveFailed>(node).await?;
+                    ctx.on_exception::<HardwareFault>(node).await?;
                     let task = match &attempt.command {
                         Command::Leg(m) => ctx.send_watched(m, []),
                         Command::Body(m) => ctx.send_watched(m, []),
@@ -85,6 +92,7 @@ impl Client {
         Client {
             module,
             failures,
+            faults,
             contacts,
             states,
             outcomes,
@@ -270,4 +278,54 @@ async fn moves_send_informs_and_a_bad_move_raises_move_failed() {
     assert_eq!(status.falls, 0);
     assert!(!status.fallen);
     assert!((status.clock_s - moved.t_s).abs() < 1e-12);
+}
+
+/// The emergency stop: after `legged.halt` every move is refused with a hardware fault that
+/// says how to resume, nothing moves, and after `legged.resume` moves are carried out again.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_emergency_stop_refuses_every_move_until_resumed() {
+    let (_central, connector) = in_process_central().await;
+    let _controller = within("controller connects", connect(&connector, config()))
+        .await
+        .unwrap();
+    let mut walker = Client::connect(&connector).await;
+    let halt = walker.module.send_watched(&Halt, []).unwrap();
+    assert_eq!(
+        within("the halt ends", halt.outcome()).await.unwrap(),
+        TaskOutcome::Achieved
+    );
+    let before = walker.module.query(&BodyPose).await.unwrap();
+    let mut target = before.clone();
+    target.x_m += 0.02;
+    match walker
+        .run(Command::Body(BodyMove {
+            target: target.clone(),
+        }))
+        .await
+    {
+        TaskOutcome::Failed(reason) => assert!(
+            reason.contains("emergency stop") && reason.contains("legged.resume"),
+            "{reason}"
+        ),
+        other => panic!("a move while halted: {other:?}"),
+    }
+    let fault = within("the hardware fault", walker.faults.recv())
+        .await
+        .expect("a hardwareFault");
+    assert!(
+        fault.leg.is_none() && fault.detail.contains("legged.halt"),
+        "{fault:?}"
+    );
+    assert_eq!(walker.module.query(&BodyPose).await.unwrap(), before);
+    let resume = walker.module.send_watched(&Resume, []).unwrap();
+    assert_eq!(
+        within("the resume ends", resume.outcome()).await.unwrap(),
+        TaskOutcome::Achieved
+    );
+    assert_eq!(
+        walker.run(Command::Body(BodyMove { target })).await,
+        TaskOutcome::Achieved
+    );
+    let after = walker.module.query(&BodyPose).await.unwrap();
+    assert!((after.x_m - before.x_m - 0.02).abs() < 1e-9);
 }

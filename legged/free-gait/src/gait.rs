@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Point2, Point3, Translation3, UnitQuaternion, Vector2, Vector3};
-use tca_legged_model::{IkOptions, JointKind, RobotModel};
+use tca_legged_model::{IkOptions, JointKind, RobotModel, SelfContact};
 use tca_stability::{Polygon, conservative_support_polygon, margin_along_path};
 
 use crate::collision::{Hit, Probes};
@@ -17,6 +17,14 @@ use crate::geometry::{
 use crate::params::GaitParams;
 use crate::state::{Action, GaitState, LegGaitState, StepPlan};
 use crate::terrain::TerrainView;
+
+/// Where the body goes after the step being planned: along `direction` (world, unit) by
+/// up to `ahead_m` (a full step, or what is left to the goal).
+#[derive(Debug, Clone, Copy)]
+struct Next {
+    direction: Vector2<f64>,
+    ahead_m: f64,
+}
 
 /// Joint samples of each leg's workspace from which candidate footholds are drawn.
 const WORKSPACE_SAMPLES: usize = 8192;
@@ -364,6 +372,15 @@ impl FreeGait {
         Ok(out)
     }
 
+    /// Two legs' links nearer than the leg clearance in `posture` (with `leg`, only pairs
+    /// involving that leg).
+    fn legs_touch(&self, posture: &[Vec<f64>], leg: Option<usize>) -> Option<SelfContact> {
+        self.model
+            .legs_touching(posture, leg, self.params.leg_clearance_m)
+            .ok()
+            .flatten()
+    }
+
     fn move_samples(&self, from: &Isometry3<f64>, to: &Isometry3<f64>) -> usize {
         let travel = (to.translation.vector - from.translation.vector).norm();
         let turn = from.rotation.angle_to(&to.rotation) * 2.0 * self.params.scale;
@@ -417,6 +434,14 @@ impl FreeGait {
                     &fallback,
                 )
                 .map_err(|h| format!("during the body move {}", h.describe()))?;
+        }
+        // Legs that already touch (a posture the gait did not choose) may move apart.
+        if self.legs_touch(&posture, None).is_none() {
+            for (_, q) in &samples {
+                if let Some(contact) = self.legs_touch(q, None) {
+                    return Err(format!("during the body move {contact}"));
+                }
+            }
         }
         let posture = samples.last().map(|(_, q)| q.clone()).unwrap_or(posture);
         Ok(BodyMove {
@@ -656,7 +681,11 @@ impl FreeGait {
                         continue;
                     }
                     let body_progress = here_progress(&body.target);
-                    match self.step_leg(state, terrain, &body, leg, direction, body_progress) {
+                    let next = Next {
+                        direction,
+                        ahead_m: p.max_body_step_m.min((distance - advance * f).max(0.0)),
+                    };
+                    match self.step_leg(state, terrain, &body, leg, next, body_progress) {
                         Ok((swing, foothold)) => {
                             if f < 1.0 {
                                 tracing::debug!(
@@ -738,7 +767,7 @@ impl FreeGait {
         terrain: &dyn TerrainView,
         body: &BodyMove,
         leg: usize,
-        direction: Vector2<f64>,
+        next: Next,
         body_progress: f64,
     ) -> Result<(Swing, Foothold), String> {
         let others: Vec<usize> = state
@@ -753,7 +782,7 @@ impl FreeGait {
         // that are.
         let needed = self.params.min_progress_m - body_progress;
         for filter in [f64::NEG_INFINITY, needed] {
-            let footholds = match self.footholds(state, terrain, body, leg, direction, filter) {
+            let footholds = match self.footholds(state, terrain, body, leg, next, filter) {
                 Ok(f) => f,
                 Err(e) => {
                     why.push(e);
@@ -804,9 +833,10 @@ impl FreeGait {
         terrain: &dyn TerrainView,
         body: &BodyMove,
         leg: usize,
-        direction: Vector2<f64>,
+        next: Next,
         needed: f64,
     ) -> Result<Vec<Foothold>, String> {
+        let direction = next.direction;
         let info = &self.legs[leg];
         let p = &self.params;
         let inverse = body.target.inverse();
@@ -864,6 +894,7 @@ impl FreeGait {
         let old = state.legs[leg].foot;
         let (mut unknown, mut forbidden, mut unreachable, mut crowded, mut unstable, mut trapping) =
             (0, 0, 0, 0, 0, 0);
+        let (mut touching, mut blocking) = (0, 0);
         let mut pits = 0;
         let mut found = Vec::new();
         for (pre, candidate) in ranked.into_iter().take(CANDIDATES_TRIED) {
@@ -930,6 +961,14 @@ impl FreeGait {
             }
             let mut posture = body.posture.clone();
             posture[leg] = joints.clone();
+            if self.legs_touch(&posture, Some(leg)).is_some() {
+                touching += 1;
+                continue;
+            }
+            if self.blocks_the_next_move(state, body, &posture, leg, &centre, next) {
+                blocking += 1;
+                continue;
+            }
             let contact = contact_of_centre(&centre, info.radius);
             let polygon = polygon_of(others.iter().copied().chain(std::iter::once(contact)));
             let Some(com) = com_world(&self.model, &body.target, &posture) else {
@@ -972,12 +1011,62 @@ impl FreeGait {
                 "none of its candidate footholds will do ({unknown} on unknown ground, \
                  {forbidden} on forbidden ground, {unreachable} out of reach, {pits} in a hollow it could \
                  not climb out of, {crowded} too near \
-                 another foot, {unstable} too little margin, {trapping} would leave another leg \
+                 another foot, {touching} bringing its links against another leg's, {blocking} \
+                 from which the body could not go on, {unstable} too little margin, {trapping} would leave another leg \
                  unable to lift)"
             ));
         }
         found.sort_by(|a, b| a.score.total_cmp(&b.score));
         Ok(found)
+    }
+
+    /// Whether `leg`, set down at `centre` (posture `posture` at `body`), would stop the body
+    /// going on along `next`, every standing foot staying where it is: out of its leg's
+    /// reach after half the next step, or touching another leg after half or all of it (a
+    /// rear foot set far forward under the middle leg's links, a front foot turned in front
+    /// of its column, would block every later body move).
+    fn blocks_the_next_move(
+        &self,
+        state: &GaitState,
+        body: &BodyMove,
+        posture: &[Vec<f64>],
+        leg: usize,
+        centre: &Point3<f64>,
+        next: Next,
+    ) -> bool {
+        if next.ahead_m <= 0.0 {
+            return false;
+        }
+        let step = Vector3::new(next.direction.x, next.direction.y, 0.0) * next.ahead_m;
+        'poses: for fraction in [0.5, 1.0] {
+            let pose = Isometry3::from_parts(
+                Translation3::from(body.target.translation.vector + step * fraction),
+                body.target.rotation,
+            );
+            let inverse = pose.inverse();
+            let mut future = posture.to_vec();
+            for (i, q) in future.iter_mut().enumerate() {
+                let at = if i == leg {
+                    *centre
+                } else if state.legs[i].stance {
+                    centre_of_contact(&state.legs[i].foot, self.legs[i].radius)
+                } else {
+                    continue;
+                };
+                match self.ik(i, &(inverse * at), q, 0) {
+                    Some(joints) => *q = joints,
+                    // This foot out of reach half a step on: it would hold the body back.
+                    None if i == leg && fraction <= 0.5 => return true,
+                    // Another foot out of reach there: not this foothold's doing; the body
+                    // goes less far.
+                    None => continue 'poses,
+                }
+            }
+            if self.legs_touch(&future, Some(leg)).is_some() {
+                return true;
+            }
+        }
+        false
     }
 
     /// Joint positions that move the foot of `leg` up by `rise` metres (world).
@@ -1272,6 +1361,12 @@ impl FreeGait {
                 }
             }
             q[leg] = joints;
+            // Where the leg starts is where it is: only where it goes is checked.
+            if k > 0
+                && let Some(contact) = self.legs_touch(&q, Some(leg))
+            {
+                return Err(format!("swinging leg `{}`, {contact}", info.name));
+            }
             com_path.extend(com_world(&self.model, body, &q));
             let own = Some(leg);
             let fallback = |_: Option<usize>| None;
@@ -1313,7 +1408,17 @@ impl FreeGait {
         };
         let name = self.legs[leg].name.clone();
         let footholds = self
-            .footholds(state, terrain, &body, leg, direction, f64::NEG_INFINITY)
+            .footholds(
+                state,
+                terrain,
+                &body,
+                leg,
+                Next {
+                    direction,
+                    ahead_m: 0.0,
+                },
+                f64::NEG_INFINITY,
+            )
             .map_err(|reason| GaitError::NoFoothold {
                 leg: name.clone(),
                 reason,

@@ -13,8 +13,8 @@
 //! 2. **Body move.** The largest fraction of the move every standing leg can follow, or
 //!    less; each is checked every `sample_m` for inverse kinematics of every standing leg,
 //!    the stability margin over the standing feet (`tca_stability::margin_along_path` on
-//!    the centre of mass sampled along the move) and every link's collision shapes against
-//!    the terrain. If lifting the leg afterwards would leave less than `min_margin_m`, the
+//!    the centre of mass sampled along the move), every link's collision shapes against
+//!    the terrain and the legs' links against each other. If lifting the leg afterwards would leave less than `min_margin_m`, the
 //!    body also shifts toward the middle of the feet that stay.
 //! 3. **Foothold.** Candidates are drawn from the leg's sampled workspace, placed by the
 //!    body's new pose, kept to the leg's own side of the body (no nearer its centre line
@@ -29,6 +29,12 @@
 //!    segment is a straight line in joint space, sampled for the foot's clearance, the
 //!    leg's link shapes and the margin of the feet that stay; higher travel is tried when
 //!    blocked.
+//!
+//! 5. **Own legs.** No foothold, no sample of a swing and no sample of a body move brings
+//!    the links of two legs within `leg_clearance_m` of each other
+//!    (`RobotModel::legs_touching`, capsules); nor is a foothold taken where the leg would
+//!    touch another once the body has gone on by half or all of a full step, which would
+//!    block the next body move.
 //!
 //! The moves use the model's own kinematics (`Leg::inverse_kinematics`,
 //! `Leg::foot_position`, `RobotModel::collision_shapes`), as the executor does.

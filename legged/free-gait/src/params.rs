@@ -41,21 +41,25 @@ pub struct GaitParams {
     /// above the body as well as below it, the middle of the range can be a body on the
     /// ground).
     pub height_bias: Option<f64>,
-    /// Length scale of the robot: 1 for the Ambler, about 0.1 for the hexapod.
+    /// Room kept between the links of different legs (each link's capsules widened by
+    /// this), metres: no planned posture or move brings two legs nearer.
+    #[serde(default)]
+    pub leg_clearance_m: f64,
+    /// Length scale of the robot: about 1.1 for the Ambler, about 0.1 for the hexapod.
     pub scale: f64,
 }
 
-/// The Ambler's size (mean horizontal distance of its standing feet from the body centre),
-/// metres: the length every default is scaled from.
-const AMBLER_SIZE_M: f64 = 3.1;
+/// The size (mean horizontal distance of the standing feet from the body centre), metres,
+/// of a robot that gets the defaults unscaled; every length scales from it.
+const REFERENCE_SIZE_M: f64 = 3.1;
 
 impl GaitParams {
     /// Defaults for a robot, every length scaled by its size (the mean horizontal distance
-    /// of its standing feet from the body centre) against the Ambler's.
+    /// of its standing feet from the body centre) against a reference size of 3.1 m.
     pub fn for_model(model: &RobotModel) -> Self {
         let legs = model.legs();
         let size = if legs.is_empty() {
-            AMBLER_SIZE_M
+            REFERENCE_SIZE_M
         } else {
             let total: f64 = legs
                 .iter()
@@ -64,7 +68,7 @@ impl GaitParams {
                 .sum();
             (total / legs.len() as f64).max(1e-3)
         };
-        let s = size / AMBLER_SIZE_M;
+        let s = size / REFERENCE_SIZE_M;
         let height = model.neutral_height();
         let clearance_under_body = model
             .standing_posture(height)
@@ -105,6 +109,7 @@ impl GaitParams {
             goal_tolerance_m: 0.3 * s,
             unknown_rise_m: (clearance_under_body * 0.5).max(0.0),
             min_progress_m: 0.02 * s,
+            leg_clearance_m: 0.01 * s,
             height_bias: lifts_vertically.then_some(0.8),
             scale: s,
         }

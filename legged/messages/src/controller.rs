@@ -22,6 +22,18 @@ pub struct RobotDescription {
     pub legs: Vec<String>,
 }
 
+/// Command: the emergency stop. From now on the Controller refuses every move, each
+/// refusal raising [`crate::HardwareFault`] (which halts a walk), until [`Resume`]. A move
+/// already under way is carried out to its end.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Halt;
+message!(Halt: command "legged.halt");
+
+/// Command: lifts an emergency stop ([`Halt`]): the Controller carries out moves again.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Resume;
+message!(Resume: command "legged.resume");
+
 /// Query: where the body is now.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BodyPose;

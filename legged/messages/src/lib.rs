@@ -12,7 +12,8 @@
 //!
 //! - [`geometry`]: [`WorldPoint`], [`Pose`].
 //! - [`controller`]: the robot's side: [`RobotModel`], [`BodyPose`], [`LegState`] queries;
-//!   [`LegMove`] and [`BodyMove`] commands; the [`FootContact`] inform.
+//!   [`LegMove`] and [`BodyMove`] commands, the emergency stop [`Halt`] and [`Resume`]; the
+//!   [`FootContact`] inform.
 //! - [`exceptions`]: [`MoveFailed`], [`HardwareFault`], [`TipOver`].
 //! - [`walking`]: the [`LeggedWalk`] goal, the [`SupportState`] inform every support change
 //!   sends, and the Controller's counters ([`LeggedStatus`]).
@@ -23,7 +24,8 @@ pub mod geometry;
 pub mod walking;
 
 pub use controller::{
-    BodyMove, BodyPose, FootContact, LegMove, LegState, LegStateReply, RobotDescription, RobotModel,
+    BodyMove, BodyPose, FootContact, Halt, LegMove, LegState, LegStateReply, Resume,
+    RobotDescription, RobotModel,
 };
 pub use exceptions::{HardwareFault, MoveFailed, MoveFailureKind, TipOver};
 pub use geometry::{Pose, WorldPoint};

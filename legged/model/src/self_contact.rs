@@ -7,6 +7,7 @@ use nalgebra::Point3;
 
 use crate::error::KinematicsError;
 use crate::model::RobotModel;
+use crate::shape::PlacedShape;
 
 /// Two parts of the robot that touch.
 #[derive(Debug, Clone, PartialEq)]
@@ -39,33 +40,9 @@ impl RobotModel {
         posture: &[Q],
     ) -> Result<Option<SelfContact>, KinematicsError> {
         let shapes = self.collision_shapes(posture)?;
-        let mut legs = Vec::new();
-        let mut body = Vec::new();
-        for s in &shapes {
-            let link = self.link(s.link);
-            match link.and_then(|l| l.leg()) {
-                Some(leg) => {
-                    for (a, b, r) in s.shape.capsules() {
-                        legs.push((leg, s, s.pose * a, s.pose * b, r));
-                    }
-                }
-                None => body.push(s),
-            }
-        }
-        for (i, a) in legs.iter().enumerate() {
-            for b in legs.iter().skip(i + 1) {
-                if a.0 == b.0 {
-                    continue;
-                }
-                let d = segment_distance(a.2, a.3, b.2, b.3);
-                if d < a.4 + b.4 {
-                    return Ok(Some(SelfContact {
-                        first: a.1.link.to_owned(),
-                        second: b.1.link.to_owned(),
-                        distance_m: d,
-                    }));
-                }
-            }
+        let (legs, body) = self.split_capsules(&shapes);
+        if let Some(contact) = legs_touching(&legs, None, 0.0) {
+            return Ok(Some(contact));
         }
         let mut seen = std::collections::HashSet::new();
         for &(_, s, ..) in &legs {
@@ -87,6 +64,70 @@ impl RobotModel {
         }
         Ok(None)
     }
+
+    /// The first pair of links of different legs whose capsules, each widened by
+    /// `margin_m`, overlap in `posture`; with `leg` given, only pairs with one link on that
+    /// leg. The body's shapes are not tested: this is the cheap check a planner makes at
+    /// every sample of a move (a few microseconds for six legs).
+    pub fn legs_touching<Q: AsRef<[f64]>>(
+        &self,
+        posture: &[Q],
+        leg: Option<usize>,
+        margin_m: f64,
+    ) -> Result<Option<SelfContact>, KinematicsError> {
+        let shapes = self.collision_shapes(posture)?;
+        let (legs, _) = self.split_capsules(&shapes);
+        Ok(legs_touching(&legs, leg, margin_m))
+    }
+
+    /// The capsules of the legs' shapes (with the leg each belongs to) and the body's
+    /// shapes.
+    fn split_capsules<'a>(
+        &self,
+        shapes: &'a [PlacedShape<'a>],
+    ) -> (Vec<LegCapsule<'a>>, Vec<&'a PlacedShape<'a>>) {
+        let mut legs = Vec::new();
+        let mut body = Vec::new();
+        for s in shapes {
+            match self.link(s.link).and_then(|l| l.leg()) {
+                Some(leg) => {
+                    for (a, b, r) in s.shape.capsules() {
+                        legs.push((leg, s, s.pose * a, s.pose * b, r));
+                    }
+                }
+                None => body.push(s),
+            }
+        }
+        (legs, body)
+    }
+}
+
+/// A capsule of a leg's shape: the leg, the shape, the axis's ends and the radius.
+type LegCapsule<'a> = (usize, &'a PlacedShape<'a>, Point3<f64>, Point3<f64>, f64);
+
+/// The first pair of capsules of different legs (one of them on `only`, when given) closer
+/// than their radii plus twice `margin_m`.
+fn legs_touching(
+    legs: &[LegCapsule<'_>],
+    only: Option<usize>,
+    margin_m: f64,
+) -> Option<SelfContact> {
+    for (i, a) in legs.iter().enumerate() {
+        for b in legs.iter().skip(i + 1) {
+            if a.0 == b.0 || only.is_some_and(|l| a.0 != l && b.0 != l) {
+                continue;
+            }
+            let d = segment_distance(a.2, a.3, b.2, b.3);
+            if d < a.4 + b.4 + 2.0 * margin_m {
+                return Some(SelfContact {
+                    first: a.1.link.to_owned(),
+                    second: b.1.link.to_owned(),
+                    distance_m: d,
+                });
+            }
+        }
+    }
+    None
 }
 
 /// The closest distance between the segments `a0 a1` and `b0 b1`, metres.
@@ -220,5 +261,39 @@ mod tests {
             "the front and middle legs meet when their hips turn toward each other"
         );
         assert!(touched < 121, "but not everywhere");
+    }
+
+    #[test]
+    fn the_legs_only_check_finds_what_the_full_check_finds_between_legs() {
+        let model = RobotModel::builtin("hexapod").unwrap();
+        let front = model.leg_index("left_front").unwrap();
+        let middle = model.leg_index("left_middle").unwrap();
+        let rear = model.leg_index("right_rear").unwrap();
+        let range = |leg: usize| model.legs()[leg].joints()[0].limits();
+        let (f, m) = (range(front), range(middle));
+        let (mut both, mut widened) = (0, 0);
+        for i in 0..=10 {
+            for j in 0..=10 {
+                let mut p = model.neutral_posture();
+                p[front][0] = f.lower + (f.upper - f.lower) * f64::from(i) / 10.0;
+                p[middle][0] = m.lower + (m.upper - m.lower) * f64::from(j) / 10.0;
+                let full = model.self_contact(&p).unwrap();
+                let legs = model.legs_touching(&p, None, 0.0).unwrap();
+                assert_eq!(full.is_some(), legs.is_some(), "{full:?} {legs:?}");
+                // Asked about one of the two legs, the same; about a leg far away, nothing.
+                assert_eq!(
+                    model.legs_touching(&p, Some(front), 0.0).unwrap().is_some(),
+                    legs.is_some()
+                );
+                assert!(model.legs_touching(&p, Some(rear), 0.0).unwrap().is_none());
+                both += usize::from(legs.is_some());
+                widened += usize::from(model.legs_touching(&p, None, 0.01).unwrap().is_some());
+            }
+        }
+        assert!(both > 0);
+        assert!(
+            widened > both,
+            "a margin finds more near misses: {widened} vs {both}"
+        );
     }
 }

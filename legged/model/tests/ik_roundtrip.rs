@@ -110,11 +110,11 @@ fn targets_out_of_reach_are_refused_with_the_distance() {
             }
         }
     }
-    // Within the reach of the links but outside the joint ranges: behind the Ambler's
-    // left front shoulder, where its stack's rear leg goes but it does not.
+    // Within the reach of the links but outside the joint ranges: behind and out from the
+    // Ambler's left column, where its stack's rear leg goes but its front leg does not.
     let ambler = RobotModel::builtin("ambler").expect("load");
     let leg = ambler.leg("left_front").expect("leg");
-    let behind = Point3::new(-2.0, 1.55, -2.45);
+    let behind = Point3::new(-2.0, 2.6, -2.45);
     let e = leg
         .inverse_kinematics(&behind, &IkOptions::default())
         .expect_err("out of range");

@@ -296,25 +296,61 @@ pub(crate) fn rest_height(terrain: &HeightField, xy: Point2<f64>, r: f64) -> f64
 
 /// Where a foot sphere of radius `r` lowered onto the terrain above `xy` touches it: the
 /// terrain point under the sphere that holds it highest (on a level patch the point under
-/// its centre; on a step's edge, the edge).
+/// its centre; on a step's edge, the edge). Where several sampled points hold it almost
+/// as high (on a slope, whose true contact lies between samples), their average weighted
+/// by how nearly each holds it up, so that the point moves smoothly with the foot rather
+/// than jumping from one sample to the next.
 pub(crate) fn touch_point(terrain: &HeightField, xy: Point2<f64>, r: f64) -> Point3<f64> {
-    resting(terrain, xy, r).1
+    let mut candidates = Vec::new();
+    each_resting_candidate(terrain, xy, r, |centre, point| {
+        candidates.push((centre, point))
+    });
+    let best = candidates
+        .iter()
+        .map(|c| c.0)
+        .fold(f64::NEG_INFINITY, f64::max);
+    // Points holding the centre within a few multiples of this below the best count.
+    let scale = (0.005 * r).max(1e-6);
+    let (mut sum, mut weight) = (nalgebra::Vector3::zeros(), 0.0);
+    for (centre, point) in &candidates {
+        let w = (-(best - centre) / scale).exp();
+        if w > 1e-6 {
+            sum += point.coords * w;
+            weight += w;
+        }
+    }
+    if weight > 0.0 {
+        Point3::from(sum / weight)
+    } else {
+        resting(terrain, xy, r).1
+    }
 }
 
 /// The resting height of the sphere's centre and the terrain point that holds it there.
 fn resting(terrain: &HeightField, xy: Point2<f64>, r: f64) -> (f64, Point3<f64>) {
+    let mut best = (f64::NEG_INFINITY, Point3::new(xy.x, xy.y, 0.0));
+    each_resting_candidate(terrain, xy, r, |centre, point| {
+        if centre > best.0 {
+            best = (centre, point);
+        }
+    });
+    best
+}
+
+/// Every sampled terrain point under the sphere (its centre, three rings, the terrain's
+/// own samples) with the height the sphere's centre would rest at on it alone.
+fn each_resting_candidate(
+    terrain: &HeightField,
+    xy: Point2<f64>,
+    r: f64,
+    mut out: impl FnMut(f64, Point3<f64>),
+) {
     let h = terrain.height_at(xy.x, xy.y);
-    let mut best = (h + r, Point3::new(xy.x, xy.y, h));
+    out(h + r, Point3::new(xy.x, xy.y, h));
     if r <= 0.0 {
-        return best;
+        return;
     }
     let lift = |d2: f64| (r * r - d2).max(0.0).sqrt();
-    let mut consider = |x: f64, y: f64, ground: f64, d2: f64| {
-        let centre = ground + lift(d2);
-        if centre > best.0 {
-            best = (centre, Point3::new(x, y, ground));
-        }
-    };
     for ring in 1..=3 {
         let rr = r * ring as f64 / 3.0;
         let count = 8 * ring;
@@ -322,7 +358,8 @@ fn resting(terrain: &HeightField, xy: Point2<f64>, r: f64) -> (f64, Point3<f64>)
             let a = std::f64::consts::TAU * k as f64 / count as f64;
             let (s, co) = a.sin_cos();
             let (x, y) = (xy.x + rr * co, xy.y + rr * s);
-            consider(x, y, terrain.height_at(x, y), rr * rr);
+            let ground = terrain.height_at(x, y);
+            out(ground + lift(rr * rr), Point3::new(x, y, ground));
         }
     }
     let g = terrain.grid();
@@ -334,11 +371,11 @@ fn resting(terrain: &HeightField, xy: Point2<f64>, r: f64) -> (f64, Point3<f64>)
             let y = g.origin().y + iy as f64 * res;
             let d2 = (x - xy.x).powi(2) + (y - xy.y).powi(2);
             if d2 <= r * r {
-                consider(x, y, g.cells()[iy * g.nx() + ix], d2);
+                let ground = g.cells()[iy * g.nx() + ix];
+                out(ground + lift(d2), Point3::new(x, y, ground));
             }
         }
     }
-    best
 }
 
 #[cfg(test)]
@@ -415,5 +452,33 @@ mod tests {
         assert!((rest_height(&t, Point2::new(1.0, 1.0), 0.05) - 1.05).abs() < 1e-12);
         let c = Point3::new(0.5, 0.5, 0.03);
         assert!(foot_clearance(&t, &c, 0.05) < 0.0);
+    }
+
+    #[test]
+    fn the_touch_point_on_a_slope_moves_smoothly_with_the_foot() {
+        // A 25 degree slope rising along x, 0.1 m cells: the Ambler's foot on it.
+        let (nx, ny, res) = (60, 20, 0.1);
+        let rise = 25f64.to_radians().tan();
+        let h: Vec<f64> = (0..ny)
+            .flat_map(|_| (0..nx).map(move |ix| ix as f64 * res * rise))
+            .collect();
+        let t = HeightField::new(Point2::new(0.0, 0.0), res, nx, ny, h).unwrap();
+        let r = 0.15;
+        let mut last: Option<Point3<f64>> = None;
+        for k in 0..300 {
+            let xy = Point2::new(2.0 + k as f64 * 0.001, 1.0 + k as f64 * 0.0003);
+            let p = touch_point(&t, xy, r);
+            // On the plane, a little uphill of the centre.
+            assert!((p.z - t.height_at(p.x, p.y)).abs() < 2e-3, "{p:?}");
+            assert!(p.x > xy.x && p.x < xy.x + r, "{p:?} {xy:?}");
+            if let Some(q) = last {
+                assert!(
+                    (p - q).norm() < 3e-3,
+                    "a 1 mm move of the foot moved the point {:.4} m",
+                    (p - q).norm()
+                );
+            }
+            last = Some(p);
+        }
     }
 }

@@ -292,6 +292,11 @@ pub async fn walk(
         .await
         .with_context(|| format!("the walker cannot join central ({})", connector.describe()))?;
 
+    // Asked once, so that the traffic log holds the robot's description (a Foxglove
+    // export of the log then shows the robot in 3D).
+    if let Err(e) = walker.query(&tca_legged_messages::RobotModel).await {
+        tracing::warn!(error = %e, "the Controller did not describe the robot");
+    }
     let task = walker.send_watched(
         &LeggedWalk {
             goal_x_m: goal[0],

@@ -6,13 +6,14 @@
 //! the turn lock keeps that true under any capacity), run the simulator, wait the move's
 //! wall-clock time, then raise the failure's exception in their own context and end.
 
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
 use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
 use tca_single_leg_messages::{
     BodyMove, BodyPosition, CartLegPosition, ControllerState, ControllerStatus, GlobalLegPosition,
-    JointLegPosition, LegMove, ReadForce, SetTransForce,
+    Halt, HardwareFault, JointLegPosition, LegMove, ReadForce, Resume, SetTransForce,
 };
 use tokio::time::Instant;
 
@@ -28,7 +29,8 @@ use crate::persist::{Persistence, StateError};
 /// Controller's messages (§4.2) until the returned [`Module`] (and every clone) is dropped
 /// or closed.
 ///
-/// Commands: [`LegMove`], [`BodyMove`], [`SetTransForce`]. Queries: [`BodyPosition`],
+/// Commands: [`LegMove`], [`BodyMove`], [`SetTransForce`], and the emergency stop [`Halt`]
+/// (every later command refused, raising `HardwareFault`) and [`Resume`]. Queries: [`BodyPosition`],
 /// [`JointLegPosition`], [`CartLegPosition`], [`GlobalLegPosition`], [`ReadForce`],
 /// [`ControllerStatus`]. A failed `legMove`/`bodyMove` raises
 /// [`MoveFailed`](tca_single_leg_messages::MoveFailed) (or
@@ -71,6 +73,7 @@ pub async fn connect(
         persistence,
         epoch,
         pace: config.speed,
+        halted: Arc::new(AtomicBool::new(false)),
     };
     let builder = Module::builder(config.module_name.clone())
         .replace(config.replace)
@@ -105,6 +108,25 @@ pub async fn connect(
                     s.command(&ctx, |c, now| c.set_trans_force(m.force_n, now))
                         .await
                 }
+            }
+        })
+        // The emergency stop: it takes no turn, so it is taken while a move plays out.
+        .handle({
+            let s = s.clone();
+            move |_ctx, _h: Halt| {
+                if !s.halted.swap(true, Ordering::SeqCst) {
+                    tracing::warn!("emergency stop: every command refused until resume");
+                }
+                async { Ok(()) }
+            }
+        })
+        .handle({
+            let s = s.clone();
+            move |_ctx, _r: Resume| {
+                if s.halted.swap(false, Ordering::SeqCst) {
+                    tracing::info!("emergency stop lifted: commands carried out again");
+                }
+                async { Ok(()) }
             }
         })
         // Queries.
@@ -189,6 +211,8 @@ struct Shared {
     epoch: Instant,
     /// How fast moves play out against the wall clock.
     pace: SpeedFactor,
+    /// Whether an emergency stop holds (from `halt` until `resume`).
+    halted: Arc<AtomicBool>,
 }
 
 /// Settles the move in progress when its command's handler ends before the move has played
@@ -266,6 +290,21 @@ impl Shared {
             // already: answer as then, without moving the leg a second time.
             tracing::info!(id = %ctx.message_id(), "redelivered command was carried out before; answering with its outcome");
             return self.end(ctx, outcome);
+        }
+        if self.halted.load(Ordering::SeqCst) {
+            let reason = "the Controller is halted by an emergency stop (halt); nothing was \
+                          moved: send resume to move again"
+                .to_owned();
+            tracing::warn!("a command refused: the emergency stop holds");
+            return self.end(
+                ctx,
+                Err(CommandFailure {
+                    exception: Some(Raised::HardwareFault(HardwareFault {
+                        detail: reason.clone(),
+                    })),
+                    reason,
+                }),
+            );
         }
         let on_clock = ctx.on_central_clock();
         let run = {

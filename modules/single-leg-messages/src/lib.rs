@@ -112,6 +112,18 @@ pub struct SetTransForce {
 }
 message!(SetTransForce: command "setTransForce");
 
+/// Command: the emergency stop. From now on the Controller refuses every command, each
+/// refusal raising [`HardwareFault`] (which halts a walk), until [`Resume`]. A move already
+/// under way is carried out to its end.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Halt;
+message!(Halt: command "halt");
+
+/// Command: lifts an emergency stop ([`Halt`]): the Controller carries out commands again.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Resume;
+message!(Resume: command "resume");
+
 /// Query: the carriage pose in world coordinates.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BodyPosition;

@@ -25,11 +25,13 @@ pub fn terrain(
     HeightField::new(Point2::new(x0, y0), res, nx, ny, h).expect("a terrain")
 }
 
-/// The cliff course: a plateau `height` m tall from x = 14 m on, across y -8..4 m, with a
-/// ramp up to it for y in 4..8 m (from x = 6 to 14 m), on a 30 x 20 m map.
+/// The cliff course: a plateau `height` m tall from x = 14 m on, beside a
+/// ramp up to it for y in 3..9 m (from x = 6 to 14 m), on a 30 x 20 m map.
 pub fn cliff(height: f64) -> HeightField {
     terrain(0.0, 30.0, -10.0, 10.0, 0.1, |x, y| {
-        if y > 4.0 && y < 8.0 {
+        // A ramp 6 m wide: the Ambler's middle feet stand 7.7 m apart and fold in to no
+        // less than about 4 m apart.
+        if y > 3.0 && y < 9.0 {
             (height * (x - 6.0) / 8.0).clamp(0.0, height)
         } else if x >= 14.0 {
             height
