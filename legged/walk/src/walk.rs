@@ -270,6 +270,9 @@ pub async fn walk(
     let (c1, c2, c3) = (collected.clone(), collected.clone(), collected.clone());
     let progress_for_steps = progress.clone();
     let walker = Module::builder(format!("legged-walker-{}", std::process::id()))
+        // The latest walker takes the support states and step reports over (an earlier
+        // `tca walk --robot ... --connect` on the same system registered them too).
+        .replace(true)
         .simulated_time(true)
         .requery_after_crash(tca_module::REQUERIES_AFTER_CRASH)
         .handle(move |_ctx, s: SupportState| {

@@ -2,7 +2,7 @@
 //! the well-known channels of messages as they are tapped from central.
 
 use std::collections::HashMap;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use foxglove::messages::{FrameTransforms, Grid, Log, RawImage, SceneUpdate};
 use foxglove::{ChannelBuilder, Context, Encode, RawChannel, Schema, WebSocketServer};
@@ -21,6 +21,32 @@ pub struct LiveView {
     channels: HashMap<String, Arc<RawChannel>>,
     formats: FormatTable,
     state: WellKnownState,
+    latched: Latched,
+}
+
+/// The last message of each topic that is sent once and must reach clients that subscribe
+/// later (the robot's description), with its channel.
+type Latched = Arc<Mutex<HashMap<String, (Arc<RawChannel>, Vec<u8>)>>>;
+
+/// Sends a latched topic's last message again when a client subscribes to it.
+struct Latch(Latched);
+
+impl foxglove::websocket::ServerListener for Latch {
+    fn on_subscribe(
+        &self,
+        _client: foxglove::websocket::Client,
+        channel: foxglove::websocket::ChannelView<'_>,
+    ) {
+        let last = self
+            .0
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .get(channel.topic())
+            .cloned();
+        if let Some((c, bytes)) = last {
+            c.log(&bytes);
+        }
+    }
 }
 
 impl LiveView {
@@ -28,10 +54,12 @@ impl LiveView {
     /// runtime.
     pub async fn start(host: &str, port: u16) -> Result<Self> {
         let context = Context::new();
+        let latched = Latched::default();
         let server = WebSocketServer::new()
             .name("tca")
             .bind(host, port)
             .context(&context)
+            .listener(Arc::new(Latch(latched.clone())))
             .start()
             .await
             .map_err(|e| FoxgloveError::Server(e.to_string()))?;
@@ -41,6 +69,7 @@ impl LiveView {
             channels: HashMap::new(),
             formats: FormatTable::new(),
             state: WellKnownState::new(),
+            latched,
         })
     }
 
@@ -129,7 +158,13 @@ impl LiveView {
                         },
                         "json",
                     )?;
-                    c.log(json!({ "data": urdf }).to_string().as_bytes());
+                    let bytes = json!({ "data": urdf }).to_string().into_bytes();
+                    c.log(&bytes);
+                    // Sent once per walk: kept for clients that subscribe later.
+                    self.latched
+                        .lock()
+                        .unwrap_or_else(|p| p.into_inner())
+                        .insert(topic, (c, bytes));
                 }
             }
         }
