@@ -49,9 +49,21 @@ impl RobotModel {
             if self.link(s.link).is_none_or(|l| l.stage() <= 1) || !seen.insert(s.link) {
                 continue;
             }
+            // Only the body's shapes whose bounding balls meet this one's can hold its points.
+            let near: Vec<&PlacedShape<'_>> = body
+                .iter()
+                .copied()
+                .filter(|b| {
+                    (b.pose.translation.vector - s.pose.translation.vector).norm()
+                        <= b.shape.bounding_radius() + s.shape.bounding_radius()
+                })
+                .collect();
+            if near.is_empty() {
+                continue;
+            }
             for (point, r) in s.shape.surface_points(BODY_TEST_SPACING_M) {
                 let world = s.pose * point;
-                for b in &body {
+                for b in &near {
                     if b.shape.holds_ball(&(b.pose.inverse() * world), r) {
                         return Ok(Some(SelfContact {
                             first: s.link.to_owned(),
@@ -91,8 +103,12 @@ impl RobotModel {
         for s in shapes {
             match self.link(s.link).and_then(|l| l.leg()) {
                 Some(leg) => {
+                    let ball = (
+                        Point3::from(s.pose.translation.vector),
+                        s.shape.bounding_radius(),
+                    );
                     for (a, b, r) in s.shape.capsules() {
-                        legs.push((leg, s, s.pose * a, s.pose * b, r));
+                        legs.push((leg, s, s.pose * a, s.pose * b, r, ball));
                     }
                 }
                 None => body.push(s),
@@ -102,8 +118,16 @@ impl RobotModel {
     }
 }
 
-/// A capsule of a leg's shape: the leg, the shape, the axis's ends and the radius.
-type LegCapsule<'a> = (usize, &'a PlacedShape<'a>, Point3<f64>, Point3<f64>, f64);
+/// A capsule of a leg's shape: the leg, the shape, the axis's ends, the radius, and the
+/// ball that holds the whole shape (centre, radius).
+type LegCapsule<'a> = (
+    usize,
+    &'a PlacedShape<'a>,
+    Point3<f64>,
+    Point3<f64>,
+    f64,
+    (Point3<f64>, f64),
+);
 
 /// The first pair of capsules of different legs (one of them on `only`, when given) closer
 /// than their radii plus twice `margin_m`.
@@ -115,6 +139,11 @@ fn legs_touching(
     for (i, a) in legs.iter().enumerate() {
         for b in legs.iter().skip(i + 1) {
             if a.0 == b.0 || only.is_some_and(|l| a.0 != l && b.0 != l) {
+                continue;
+            }
+            // Shapes whose bounding balls are apart cannot touch.
+            let reach = a.5.1 + b.5.1 + 2.0 * margin_m;
+            if (a.5.0 - b.5.0).norm_squared() > reach * reach {
                 continue;
             }
             let d = segment_distance(a.2, a.3, b.2, b.3);
