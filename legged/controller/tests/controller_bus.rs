@@ -295,14 +295,9 @@ async fn an_emergency_stop_refuses_every_move_until_resumed() {
         TaskOutcome::Achieved
     );
     let before = walker.module.query(&BodyPose).await.unwrap();
-    let mut target = before.clone();
+    let mut target = before;
     target.x_m += 0.02;
-    match walker
-        .run(Command::Body(BodyMove {
-            target: target.clone(),
-        }))
-        .await
-    {
+    match walker.run(Command::Body(BodyMove { target })).await {
         TaskOutcome::Failed(reason) => assert!(
             reason.contains("emergency stop") && reason.contains("legged.resume"),
             "{reason}"
