@@ -193,15 +193,7 @@ async fn a_foxglove_client_receives_the_walk_live() {
     let Some(checker) = checker() else { return };
     let checker = checker.join("check.mjs");
     let dir = tempfile::tempdir().unwrap();
-    let endpoint = free_endpoint();
-    let launch = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/walk-legged.toml"))
-        .unwrap()
-        .replace("tcp/127.0.0.1:7447", &endpoint)
-        .replace("out/up-legged", dir.path().to_str().unwrap());
-    let file = dir.path().join("walk-legged.toml");
-    std::fs::write(&file, launch).unwrap();
-    let mut up = spawn_tca(&["up", file.to_str().unwrap()]);
-    wait_for_modules(&endpoint, &["controller", "ism", "ltm", "gait"]).await;
+    let (mut up, endpoint) = start_legged_system(dir.path()).await;
     let port = free_port().to_string();
     let mut view = spawn_tca(&[
         "foxglove",

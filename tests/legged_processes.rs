@@ -14,15 +14,7 @@ const WALK_LIMIT: Duration = Duration::from_secs(300);
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_hexapod_walks_with_every_legged_module_its_own_process() {
     let dir = tempfile::tempdir().expect("a temporary directory");
-    let endpoint = free_endpoint();
-    let launch = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/walk-legged.toml"))
-        .expect("the shipped launch file")
-        .replace("tcp/127.0.0.1:7447", &endpoint)
-        .replace("out/up-legged", dir.path().to_str().expect("a UTF-8 path"));
-    let file = dir.path().join("walk-legged.toml");
-    std::fs::write(&file, launch).expect("the launch file written");
-    let mut up = spawn_tca(&["up", file.to_str().expect("a UTF-8 path")]);
-    wait_for_modules(&endpoint, &["controller", "ism", "ltm", "gait"]).await;
+    let (mut up, endpoint) = start_legged_system(dir.path()).await;
 
     let out_dir = dir.path().join("walk");
     let walk = [

@@ -56,3 +56,19 @@ pub async fn run_tca(what: &str, args: &[&str], limit: Duration) -> (ExitStatus,
 pub async fn wait_for_modules(endpoint: &str, names: &[&str]) {
     tca().wait_for_modules(endpoint, names).await
 }
+
+/// Starts the shipped multi-legged system (`tca up walk-legged.toml`: central and the four
+/// legged modules, each its own process) on a free endpoint, logging into `dir`, and waits
+/// until every module has joined: the `tca up` process and the endpoint.
+pub async fn start_legged_system(dir: &std::path::Path) -> (ChildProcess, String) {
+    let endpoint = free_endpoint();
+    let launch = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/walk-legged.toml"))
+        .expect("the shipped launch file")
+        .replace("tcp/127.0.0.1:7447", &endpoint)
+        .replace("out/up-legged", dir.to_str().expect("a UTF-8 path"));
+    let file = dir.join("walk-legged.toml");
+    std::fs::write(&file, launch).expect("the launch file written");
+    let up = spawn_tca(&["up", file.to_str().expect("a UTF-8 path")]);
+    wait_for_modules(&endpoint, &["controller", "ism", "ltm", "gait"]).await;
+    (up, endpoint)
+}

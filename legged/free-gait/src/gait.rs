@@ -26,6 +26,18 @@ struct Next {
     ahead_m: f64,
 }
 
+/// The body part of the way along the next step, for checking footholds against it.
+struct FurtherOn {
+    /// How much of the next step.
+    fraction: f64,
+    /// The inverse of the body's pose there.
+    inverse: Isometry3<f64>,
+    /// Every leg's joints there, the standing legs' following their feet.
+    posture: Vec<Vec<f64>>,
+    /// The first standing leg (other than the one being placed) that cannot follow.
+    out_of_reach: Option<usize>,
+}
+
 /// Joint samples of each leg's workspace from which candidate footholds are drawn.
 const WORKSPACE_SAMPLES: usize = 8192;
 /// Footholds fully evaluated per leg and body target.
@@ -895,6 +907,7 @@ impl FreeGait {
         let (mut unknown, mut forbidden, mut unreachable, mut crowded, mut unstable, mut trapping) =
             (0, 0, 0, 0, 0, 0);
         let (mut touching, mut blocking) = (0, 0);
+        let further = self.further_on(state, body, leg, next);
         let mut pits = 0;
         let mut found = Vec::new();
         for (pre, candidate) in ranked.into_iter().take(CANDIDATES_TRIED) {
@@ -965,7 +978,7 @@ impl FreeGait {
                 touching += 1;
                 continue;
             }
-            if self.blocks_the_next_move(state, body, &posture, leg, &centre, next) {
+            if self.blocks_the_next_move(further.as_deref(), leg, &centre, &joints) {
                 blocking += 1;
                 continue;
             }
@@ -1020,49 +1033,86 @@ impl FreeGait {
         Ok(found)
     }
 
-    /// Whether `leg`, set down at `centre` (posture `posture` at `body`), would stop the body
-    /// going on along `next`, every standing foot staying where it is: out of its leg's
-    /// reach after half the next step, or touching another leg after half or all of it (a
-    /// rear foot set far forward under the middle leg's links, a front foot turned in front
-    /// of its column, would block every later body move).
-    fn blocks_the_next_move(
+    /// The body half and a whole of the next step on, with every other standing leg's
+    /// joints there (its foot where it stands), for [`Self::blocks_the_next_move`]: the same
+    /// for every foothold of `leg`, so worked out once per leg and body move. `None` when
+    /// there is no next step.
+    fn further_on(
         &self,
         state: &GaitState,
         body: &BodyMove,
-        posture: &[Vec<f64>],
         leg: usize,
-        centre: &Point3<f64>,
         next: Next,
-    ) -> bool {
+    ) -> Option<Vec<FurtherOn>> {
         if next.ahead_m <= 0.0 {
-            return false;
+            return None;
         }
         let step = Vector3::new(next.direction.x, next.direction.y, 0.0) * next.ahead_m;
-        'poses: for fraction in [0.5, 1.0] {
-            let pose = Isometry3::from_parts(
-                Translation3::from(body.target.translation.vector + step * fraction),
-                body.target.rotation,
-            );
-            let inverse = pose.inverse();
-            let mut future = posture.to_vec();
-            for (i, q) in future.iter_mut().enumerate() {
-                let at = if i == leg {
-                    *centre
-                } else if state.legs[i].stance {
-                    centre_of_contact(&state.legs[i].foot, self.legs[i].radius)
-                } else {
-                    continue;
-                };
-                match self.ik(i, &(inverse * at), q, 0) {
-                    Some(joints) => *q = joints,
-                    // This foot out of reach half a step on: it would hold the body back.
-                    None if i == leg && fraction <= 0.5 => return true,
-                    // Another foot out of reach there: not this foothold's doing; the body
-                    // goes less far.
-                    None => continue 'poses,
+        let poses = [0.5, 1.0]
+            .into_iter()
+            .map(|fraction| {
+                let pose = Isometry3::from_parts(
+                    Translation3::from(body.target.translation.vector + step * fraction),
+                    body.target.rotation,
+                );
+                let inverse = pose.inverse();
+                let mut posture = body.posture.clone();
+                let mut out_of_reach = None;
+                for (i, q) in posture.iter_mut().enumerate() {
+                    if i == leg || !state.legs[i].stance {
+                        continue;
+                    }
+                    let at = centre_of_contact(&state.legs[i].foot, self.legs[i].radius);
+                    match self.ik(i, &(inverse * at), q, 0) {
+                        Some(joints) => *q = joints,
+                        None => {
+                            out_of_reach = Some(i);
+                            break;
+                        }
+                    }
                 }
+                FurtherOn {
+                    fraction,
+                    inverse,
+                    posture,
+                    out_of_reach,
+                }
+            })
+            .collect();
+        Some(poses)
+    }
+
+    /// Whether `leg`, set down at `centre` with `joints`, would stop the body going on
+    /// (`further`, from [`Self::further_on`]), every standing foot staying where it is: out
+    /// of its leg's reach after half the next step, or touching another leg after half or
+    /// all of it (a rear foot set far forward under the middle leg's links, a front foot
+    /// turned in front of its column, would block every later body move).
+    fn blocks_the_next_move(
+        &self,
+        further: Option<&[FurtherOn]>,
+        leg: usize,
+        centre: &Point3<f64>,
+        joints: &[f64],
+    ) -> bool {
+        for f in further.unwrap_or_default() {
+            // Another foot out of reach there (before this one, in leg order): not this
+            // foothold's doing; the body goes less far.
+            if f.out_of_reach.is_some_and(|i| i < leg) {
+                continue;
             }
-            if self.legs_touch(&future, Some(leg)).is_some() {
+            let Some(q) = self.ik(leg, &(f.inverse * centre), joints, 0) else {
+                // This foot out of reach half a step on: it would hold the body back.
+                if f.fraction <= 0.5 {
+                    return true;
+                }
+                continue;
+            };
+            if f.out_of_reach.is_some() {
+                continue;
+            }
+            let mut posture = f.posture.clone();
+            posture[leg] = q;
+            if self.legs_touch(&posture, Some(leg)).is_some() {
                 return true;
             }
         }
