@@ -11,7 +11,7 @@ pub struct BuiltinRobot {
     pub urdf: &'static str,
 }
 
-/// The shipped robots: `ambler`, `hexapod` and `athlete`.
+/// The shipped robots: `ambler`, `hexapod`, `athlete`, `spider`, `polybot6` and `polybot8`.
 pub const BUILTIN_ROBOTS: &[BuiltinRobot] = &[
     BuiltinRobot {
         name: "ambler",
@@ -29,6 +29,24 @@ pub const BUILTIN_ROBOTS: &[BuiltinRobot] = &[
         summary: "after NASA's ATHLETE: a hexagonal body 3 m across, six limbs of six revolute \
                   joints with a wheel at each end, 850 kg",
         urdf: include_str!("../robots/athlete.urdf"),
+    },
+    BuiltinRobot {
+        name: "spider",
+        summary: "eight coxa-femur-tibia legs spread evenly round a disc 0.7 m across, \
+                  much shorter reach than the Ambler's, 68 kg",
+        urdf: include_str!("../robots/spider.urdf"),
+    },
+    BuiltinRobot {
+        name: "polybot6",
+        summary: "a six-legged configuration of 6 cm one-joint modules after PolyBot: a \
+                  0.42 m spine, three-module legs, 7.7 kg",
+        urdf: include_str!("../robots/polybot6.urdf"),
+    },
+    BuiltinRobot {
+        name: "polybot8",
+        summary: "an eight-legged configuration of 6 cm one-joint modules after PolyBot: a \
+                  0.56 m spine, three-module legs, 10.2 kg",
+        urdf: include_str!("../robots/polybot8.urdf"),
     },
 ];
 

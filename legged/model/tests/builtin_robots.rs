@@ -12,11 +12,22 @@ const LEG_NAMES: [&str; 6] = [
     "right_rear",
 ];
 
-/// Name, joints per leg, total mass (kg), foot radius (m), neutral standing height (m).
-const EXPECTED: [(&str, usize, f64, f64, f64); 3] = [
-    ("ambler", 3, 2500.0, 0.15, 2.6),
-    ("hexapod", 3, 2.5, 0.012, 0.242),
-    ("athlete", 6, 850.0, 0.25, 1.55),
+/// Leg names of the eight-legged and the numbered six-legged robots.
+const NUMBERED: [&str; 8] = [
+    "left_1", "left_2", "left_3", "left_4", "right_1", "right_2", "right_3", "right_4",
+];
+const NUMBERED6: [&str; 6] = ["left_1", "left_2", "left_3", "right_1", "right_2", "right_3"];
+
+/// Name, leg names, joints per leg, total mass (kg), foot radius (m), neutral standing
+/// height (m).
+type Expected = (&'static str, &'static [&'static str], usize, f64, f64, f64);
+const EXPECTED: [Expected; 6] = [
+    ("ambler", &LEG_NAMES, 3, 2500.0, 0.15, 2.6),
+    ("hexapod", &LEG_NAMES, 3, 2.5, 0.012, 0.242),
+    ("athlete", &LEG_NAMES, 6, 850.0, 0.25, 1.55),
+    ("spider", &NUMBERED, 3, 67.6, 0.05, 0.55),
+    ("polybot6", &NUMBERED6, 3, 7.72, 0.015, 0.135),
+    ("polybot8", &NUMBERED, 3, 10.16, 0.015, 0.135),
 ];
 
 fn robot(name: &str) -> RobotModel {
@@ -26,18 +37,18 @@ fn robot(name: &str) -> RobotModel {
 #[test]
 fn every_shipped_robot_loads_with_its_documented_shape() {
     assert_eq!(BUILTIN_ROBOTS.len(), EXPECTED.len());
-    for (name, dof, mass, radius, height) in EXPECTED {
+    for (name, legs, dof, mass, radius, height) in EXPECTED {
         let robot = robot(name);
         assert_eq!(robot.name(), name);
         assert_eq!(robot.body_link(), "body");
         let names: Vec<&str> = robot.legs().iter().map(|l| l.name()).collect();
-        assert_eq!(names, LEG_NAMES, "{name}");
+        assert_eq!(names, legs, "{name}");
         for leg in robot.legs() {
             assert_eq!(leg.dof(), dof, "{name} {}", leg.name());
             assert_eq!(leg.foot_link(), format!("{}_foot", leg.name()));
             assert_eq!(leg.foot_radius(), radius, "{name} {}", leg.name());
         }
-        assert_eq!(robot.dof(), 6 * dof);
+        assert_eq!(robot.dof(), legs.len() * dof);
         assert!(
             (robot.total_mass() - mass).abs() < 1e-9 * mass,
             "{name}: {} kg",
