@@ -26,10 +26,14 @@ pub struct BodyMap {
 }
 
 impl BodyMap {
+    /// A map covering `min..max`. Bin edges lie half a bin off the multiples of `bin_m`, so
+    /// that points on those multiples (the CG grid's cell centres at heading 0) fall in the
+    /// middle of a bin: a point and its mirror image land in mirrored bins.
     fn covering(min: Point2<f64>, max: Point2<f64>, bin_m: f64) -> Self {
-        let nx = ((max.x - min.x) / bin_m).ceil().max(1.0) as usize + 2;
-        let ny = ((max.y - min.y) / bin_m).ceil().max(1.0) as usize + 2;
-        let origin = min - Vector2::new(bin_m, bin_m);
+        let snap = |v: f64| ((v / bin_m).floor() - 1.5) * bin_m;
+        let origin = Point2::new(snap(min.x), snap(min.y));
+        let nx = ((max.x - origin.x) / bin_m).ceil().max(1.0) as usize + 2;
+        let ny = ((max.y - origin.y) / bin_m).ceil().max(1.0) as usize + 2;
         BodyMap {
             origin,
             bin_m,
@@ -411,7 +415,9 @@ impl CgRobot {
     }
 
     /// Whether the legs' ranges and the under-carriage look the same turned by any eighth
-    /// of a turn (nine-tenths of their cells in common): then one heading bin suffices.
+    /// of a turn, so that one heading bin suffices: turned by a quarter, nine-tenths of
+    /// their cells in common; turned by an eighth (which no square grid maps onto itself),
+    /// nine-tenths of the cells of each within one cell of the other's.
     pub fn radially_symmetric(&self) -> bool {
         let footprint = |t: &HeadingTable| -> HashSet<(i32, i32)> {
             t.legs
@@ -421,12 +427,20 @@ impl CgRobot {
                 .chain(t.under.iter().map(|u| (u.di, u.dj)))
                 .collect()
         };
+        let near = |set: &HashSet<(i32, i32)>, (i, j): (i32, i32)| {
+            (-1..=1).any(|a| (-1..=1).any(|b| set.contains(&(i + a, j + b))))
+        };
         let base = footprint(&self.table(0.0));
         (1..8).all(|k| {
             let other = footprint(&self.table(f64::from(k) * TAU / 8.0));
-            let common = base.intersection(&other).count();
-            let all = base.union(&other).count().max(1);
-            common as f64 / all as f64 >= 0.9
+            let share = if k % 2 == 0 {
+                base.intersection(&other).count() as f64 / base.union(&other).count().max(1) as f64
+            } else {
+                let matched = other.iter().filter(|&&c| near(&base, c)).count()
+                    + base.iter().filter(|&&c| near(&other, c)).count();
+                matched as f64 / (base.len() + other.len()).max(1) as f64
+            };
+            share >= 0.9
         })
     }
 

@@ -84,10 +84,10 @@ fn flat_ground_is_valid_and_a_plan_keeps_every_stance_standing() {
 
 #[test]
 fn straddled_patch_leaves_cg_cells_valid_and_a_large_region_grows_a_border() {
-    // A 0.6 m patch of spikes too steep to stand on at (10, 0), and a 12 x 12 m steep field
+    // A 3 m patch of spikes too steep to stand on at (10, 0), and a 12 x 12 m steep field
     // about (26, 0).
     let t = common::terrain(0.0, 40.0, -12.0, 12.0, 0.1, |x, y| {
-        let small = (x - 10.0).abs() < 0.3 && y.abs() < 0.3;
+        let small = (x - 10.0).abs() < 1.5 && y.abs() < 1.5;
         let big = (x - 26.0).abs() < 6.0 && y.abs() < 6.0;
         if small || big {
             if ((x * 10.0).round() as i64 + (y * 10.0).round() as i64) % 2 == 0 {
@@ -135,6 +135,27 @@ fn straddled_patch_leaves_cg_cells_valid_and_a_large_region_grows_a_border() {
         "valid CG cell at column {first_valid}, field ends at {last_bad_foot}"
     );
     // Far from everything, valid.
+    let (fx, fy) = grid.xy_of(Point2::new(4.0, 0.0));
+    assert!(space.is_valid(tca_cg_space::CgCell::new(fx, fy, 0)));
+
+    // The spider, whose feet reach at most 1.3 m from its centre, cannot straddle the
+    // same patch: over its middle it has invalid CG cells; well away from it, none.
+    let spider = RobotModel::builtin("spider").expect("the spider");
+    let mut space = CgSpace::for_model(&spider, &t, CgParams::default()).expect("a CG-space");
+    let grid = *space.grid();
+    assert_eq!(
+        grid.theta_bins, 1,
+        "the spider is the same turned by an eighth"
+    );
+    let (px, py) = grid.xy_of(Point2::new(10.0, 0.0));
+    let over_patch = (-3..=3)
+        .flat_map(|dx| (-3..=3).map(move |dy| (dx, dy)))
+        .filter(|&(dx, dy)| !space.is_valid(tca_cg_space::CgCell::new(px + dx, py + dy, 0)))
+        .count();
+    assert!(
+        over_patch > 0,
+        "the spider stands everywhere over the patch"
+    );
     let (fx, fy) = grid.xy_of(Point2::new(4.0, 0.0));
     assert!(space.is_valid(tca_cg_space::CgCell::new(fx, fy, 0)));
 }

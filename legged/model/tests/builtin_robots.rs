@@ -16,7 +16,9 @@ const LEG_NAMES: [&str; 6] = [
 const NUMBERED: [&str; 8] = [
     "left_1", "left_2", "left_3", "left_4", "right_1", "right_2", "right_3", "right_4",
 ];
-const NUMBERED6: [&str; 6] = ["left_1", "left_2", "left_3", "right_1", "right_2", "right_3"];
+const NUMBERED6: [&str; 6] = [
+    "left_1", "left_2", "left_3", "right_1", "right_2", "right_3",
+];
 
 /// Name, leg names, joints per leg, total mass (kg), foot radius (m), neutral standing
 /// height (m).
