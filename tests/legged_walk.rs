@@ -424,7 +424,7 @@ fn bad_robots_terrains_starts_and_goals_are_refused_with_what_to_do() {
         ),
         (
             &["walk", "--robot", "hexapod", "--planner", "astar"],
-            "free (the free gait) and rrt",
+            "free (the free gait), rrt (RRT-Connect) and cgspace",
         ),
         (
             &[

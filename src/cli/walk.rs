@@ -49,12 +49,12 @@ pub(crate) struct WalkArgs {
     #[arg(long, requires = "robot")]
     pub(crate) ground_truth: bool,
     /// With --robot: what plans the steps: `free` (the free gait, step by step on the LTM
-    /// Manager's map) or `rrt` (the integrated RRT-Connect planner: the whole walk at once
-    /// on the terrain given, planned again from where the robot stands after a failed
-    /// move).
+    /// Manager's map), `rrt` (the integrated RRT-Connect planner) or `cgspace` (CG-space
+    /// route and footfall planning); the last two plan the whole walk at once on the
+    /// terrain given, and again from where the robot stands after a failed move.
     #[arg(
         long,
-        value_name = "free|rrt",
+        value_name = "free|rrt|cgspace",
         default_value = "free",
         requires = "robot"
     )]

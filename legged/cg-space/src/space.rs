@@ -211,6 +211,15 @@ impl CgSpace {
         self.marked.insert(c);
     }
 
+    /// Marks a foot cell unusable (a foothold found unusable by other means, such as a
+    /// swing to it that cannot be carried out): the CG cells' verdicts are evaluated again.
+    pub fn forbid_foot(&mut self, ix: i32, iy: i32) {
+        if self.foot.valid(ix, iy) {
+            Arc::make_mut(&mut self.foot).forbid(ix, iy);
+            self.regions.clear();
+        }
+    }
+
     /// The cells marked invalid from outside.
     pub fn marked(&self) -> &HashSet<CgCell> {
         &self.marked

@@ -5,7 +5,9 @@
 //! 28 x 14 m, 0.1 m cells, start (3, 0) facing +X, goal (23, 0)): `boulders`, `ditch`,
 //! `slope`, `flat` and `rough`; two at the small hexapod's scale (about 3.5 x 1.5 m, 0.02 m
 //! cells, start (0.3, 0) facing +X, goal (3.2, 0)): `hexapod-rough` and `hexapod-flat`; and `hexapod-walls` (5 x 3 m, start (0.5, 0), goal
-//! (4.5, 0)), the mixed terrain with walls of Belter and Skrzypczyński's planning experiments.
+//! (4.5, 0)), the mixed terrain with walls of Belter and Skrzypczyński's planning experiments;
+//! and two for CG-space planning at the Ambler's scale (30 x 20 m): `cliff` (a plateau too
+//! tall to step, a ramp to one side) and `walled-goal` (a goal no route reaches).
 //! `COURSES.md` next to this crate describes each one.
 //!
 //! Every course is a pure function of its name and seed: the same pair always gives the
@@ -24,6 +26,7 @@
 //! ```
 
 mod ambler;
+mod cliff;
 mod error;
 mod hexapod;
 mod relief;
@@ -51,6 +54,8 @@ pub const NAMES: &[&str] = &[
     "hexapod-rough",
     "hexapod-flat",
     "hexapod-walls",
+    "cliff",
+    "walled-goal",
 ];
 
 /// Where and which way a robot starts on a course (world frame).
@@ -101,11 +106,15 @@ pub enum Course {
     /// Mixed terrain with a climbable 15 cm wall, an unclimbable 35 cm one and a steep
     /// hill to go round (hexapod, 5 x 3 m).
     HexapodWalls,
+    /// A 2.5 m plateau across the way with a ramp up to it on one side (Ambler, 30 x 20 m).
+    Cliff,
+    /// The goal in a yard walled in by a 5 m cliff (Ambler, 30 x 20 m): unreachable.
+    WalledGoal,
 }
 
 impl Course {
     /// Every built-in course, in the order of [`NAMES`].
-    pub const ALL: [Course; 8] = [
+    pub const ALL: [Course; 10] = [
         Course::Boulders,
         Course::Ditch,
         Course::Slope,
@@ -114,6 +123,8 @@ impl Course {
         Course::HexapodRough,
         Course::HexapodFlat,
         Course::HexapodWalls,
+        Course::Cliff,
+        Course::WalledGoal,
     ];
 
     /// The course called `name` (one of [`NAMES`]).
@@ -150,12 +161,16 @@ impl Course {
             Course::HexapodRough => hexapod::rough(seed)?,
             Course::HexapodFlat => hexapod::flat()?,
             Course::HexapodWalls => walls::walls(seed)?,
+            Course::Cliff => cliff::cliff(seed)?,
+            Course::WalledGoal => cliff::walled(seed)?,
         };
         let (start, goal, robot_hint) = match self {
             Course::HexapodRough | Course::HexapodFlat => {
                 (hexapod::START, hexapod::GOAL, "hexapod")
             }
             Course::HexapodWalls => (walls::START, walls::GOAL, "hexapod"),
+            Course::Cliff => (cliff::CLIFF_START, cliff::CLIFF_GOAL, "ambler"),
+            Course::WalledGoal => (cliff::WALLED_START, cliff::YARD_CENTRE, "ambler"),
             _ => (ambler::START, ambler::GOAL, "ambler"),
         };
         Ok(LeggedCourse {

@@ -35,7 +35,7 @@ fn same_seed_same_course_other_seed_other_course() {
         let b = Course::builtin(name, 11).unwrap();
         assert_eq!(heights(&a), heights(&b), "{name}");
     }
-    for name in ["boulders", "rough", "hexapod-rough"] {
+    for name in ["boulders", "rough", "hexapod-rough", "cliff", "walled-goal"] {
         let a = Course::builtin(name, 1).unwrap();
         let b = Course::builtin(name, 2).unwrap();
         assert_ne!(heights(&a), heights(&b), "{name}");
@@ -242,4 +242,23 @@ fn written_courses_read_back_the_same() {
     }
     let bad = write_course("flat", 0, dir.path().join("missing/dir/flat.asc"));
     assert!(matches!(bad, Err(CourseError::Write(_))));
+}
+
+#[test]
+fn cliff_has_its_plateau_ramp_and_relief() {
+    for seed in [1, 7] {
+        let c = Course::builtin("cliff", seed).unwrap();
+        let h = |x: f64, y: f64| c.terrain.height_at(x, y);
+        assert_eq!(c.robot_hint, "ambler");
+        assert_eq!((c.start.x_m, c.goal.x), (4.0, 24.0));
+        // The face: more than 2.4 m up within a cell, on the way from start to goal.
+        assert!(h(14.05, 0.0) - h(13.9, 0.0) > 2.4);
+        // The ramp rises evenly beside it; the relief stays within 5 cm.
+        assert!((h(10.0, 6.0) - 1.25).abs() <= 0.05 + 1e-9);
+        assert!((h(24.0, 0.0) - 2.5).abs() <= 0.05 + 1e-9);
+        assert!(h(8.0, -5.0).abs() <= 0.05 + 1e-9);
+    }
+    let w = Course::builtin("walled-goal", 1).unwrap();
+    assert!(w.terrain.height_at(25.5, 0.0) > 4.9);
+    assert!(w.terrain.height_at(20.0, 0.0).abs() <= 0.05 + 1e-9);
 }

@@ -8,6 +8,8 @@ use nalgebra::{Isometry3, Point2, Point3, Translation3, UnitQuaternion, Vector2,
 use tca_legged_model::{IkOptions, JointKind, RobotModel, SelfContact};
 use tca_stability::{Polygon, conservative_support_polygon, margin_along_path};
 
+mod moves;
+
 use crate::collision::{Hit, Probes};
 use crate::error::GaitError;
 use crate::geometry::{

@@ -33,6 +33,7 @@ use tca_module::{
 use tca_robot::HeightField;
 use tca_single_leg_messages::{MapKind, MapRegion, PlanePoint};
 
+use crate::cg_steps::CgSteps;
 use crate::map_view::{MapView, StepView};
 use crate::messages::{GaitStep, PlannedLeg, PlannedStart, RoutePlanned, StepPlanned};
 use crate::rrt_steps::RrtSteps;
@@ -79,6 +80,17 @@ pub enum StepPlanner {
         /// Its parameters.
         params: tca_rrt::RrtParams,
     },
+    /// CG-space planning (`tca-cg-space`): the route and the footfalls of the whole walk on
+    /// the given terrain, each move carried out by one of the free gait's checked moves,
+    /// planned again from where the robot stands when a move cannot be.
+    CgSpace {
+        /// The terrain it plans on.
+        terrain: Arc<HeightField>,
+        /// How its CG-space is laid out.
+        cg: tca_cg_space::CgParams,
+        /// How it plans.
+        params: tca_cg_space::PlanParams,
+    },
 }
 
 /// Allowance for a perceived map's height error, metres: twice it (1 cm) is about the 95th
@@ -121,6 +133,7 @@ impl GaitModuleConfig {
 struct Shared {
     gait: Arc<FreeGait>,
     rrt: Option<Arc<RrtSteps>>,
+    cg: Option<Arc<CgSteps>>,
     model: Arc<RobotModel>,
     config: Arc<GaitModuleConfig>,
     walks: Walks,
@@ -139,7 +152,7 @@ pub async fn connect(
     }
     let gait = FreeGait::new(config.model.clone(), config.params.clone());
     let rrt = match &config.planner {
-        StepPlanner::FreeGait => None,
+        StepPlanner::FreeGait | StepPlanner::CgSpace { .. } => None,
         StepPlanner::Rrt { terrain, params } => Some(Arc::new(
             RrtSteps::new(
                 config.model.clone(),
@@ -150,9 +163,27 @@ pub async fn connect(
             .map_err(|e| ModuleError::Config(format!("the RRT-Connect planner: {e}")))?,
         )),
     };
+    let cg = match &config.planner {
+        StepPlanner::CgSpace {
+            terrain,
+            cg,
+            params,
+        } => Some(Arc::new(
+            CgSteps::new(
+                config.model.clone(),
+                terrain.clone(),
+                cg.clone(),
+                params.clone(),
+                config.params.clone(),
+            )
+            .map_err(|e| ModuleError::Config(format!("the CG-space planner: {e}")))?,
+        )),
+        _ => None,
+    };
     let shared = Shared {
         gait: Arc::new(gait),
         rrt,
+        cg,
         model: config.model.clone(),
         walks: Walks::default(),
         config: Arc::new(config.clone()),
@@ -366,9 +397,10 @@ impl Shared {
             tracing::info!(step = step.step, "at the goal: no step needed");
             return Ok(());
         }
-        let planned = match &self.rrt {
-            Some(rrt) => self.plan_rrt(ctx, rrt, &step, &state, goal).await?,
-            None => self.plan_free(ctx, walk, &step, &state, goal).await?,
+        let planned = match (&self.rrt, &self.cg) {
+            (Some(rrt), _) => self.plan_rrt(ctx, rrt, &step, &state, goal).await?,
+            (None, Some(cg)) => self.plan_cg(ctx, cg, &step, &state, goal).await?,
+            (None, None) => self.plan_free(ctx, walk, &step, &state, goal).await?,
         };
         let Some((plan, elapsed)) = planned else {
             return Ok(());
@@ -573,6 +605,52 @@ impl Shared {
                 nodes = plan.stats.nodes,
                 ms = route.planning_ms,
                 "RRT-Connect planned the walk"
+            );
+            if let Err(e) = ctx.inform(&route) {
+                tracing::warn!(%e, "routePlanned not sent");
+            }
+        }
+        Ok(Some((next.step, elapsed)))
+    }
+
+    /// The CG-space plan's next step from `state` (planning the walk when the robot is not
+    /// where the plan expects it); `None` when the plan has no step left.
+    async fn plan_cg(
+        &self,
+        ctx: &Context,
+        cg: &Arc<CgSteps>,
+        step: &GaitStep,
+        state: &GaitState,
+        goal: Point2<f64>,
+    ) -> Result<Option<(StepPlan, std::time::Duration)>, HandlerError> {
+        let began = Instant::now();
+        let (cg, planning_state) = (cg.clone(), state.clone());
+        let next = tokio::task::spawn_blocking(move || cg.next_step(&planning_state, goal))
+            .await
+            .map_err(|e| HandlerError::new(format!("the planning task ended abnormally: {e}")))?;
+        let elapsed = began.elapsed();
+        if ctx.simulated_time() {
+            ctx.spend(ComputeTime::Measured.charged(elapsed));
+        }
+        let at = state.body.translation;
+        let next = next.map_err(|e| {
+            HandlerError::new(format!(
+                "step {} from ({:.2}, {:.2}) cannot be planned: {e}",
+                step.step, at.x, at.y
+            ))
+        })?;
+        let Some(next) = next else {
+            tracing::info!(step = step.step, "the CG-space plan has no step left");
+            return Ok(None);
+        };
+        if let Some(plan) = &next.new_plan {
+            let route = RoutePlanned::of_cg_space(step.step, plan, elapsed);
+            tracing::info!(
+                step = step.step,
+                cells = plan.route.len(),
+                nodes = plan.nodes,
+                ms = route.planning_ms,
+                "CG-space planned the walk"
             );
             if let Err(e) = ctx.inform(&route) {
                 tracing::warn!(%e, "routePlanned not sent");

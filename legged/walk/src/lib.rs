@@ -15,6 +15,7 @@
 //! - [`terrain`]: the ground (a course or a file) and the checks on start and goal.
 //! - [`messages`]: `legged.gaitStep` and `legged.stepPlanned`.
 
+pub mod cg_steps;
 pub mod check;
 pub mod gait_module;
 pub mod map_view;

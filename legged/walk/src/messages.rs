@@ -61,14 +61,15 @@ pub struct StepPlanned {
 }
 message!(StepPlanned: inform "legged.stepPlanned");
 
-/// Inform: the RRT-Connect planner planned the walk (at its first step, and again after a
-/// failed move): the path of postures, the footholds and both trees, for the report and
-/// its picture.
+/// Inform: a planner of the whole walk (RRT-Connect or CG-space) planned it (at its first
+/// step, and again after a failed move): the path, the footholds and, for RRT-Connect,
+/// both trees, for the report and its picture.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RoutePlanned {
     /// The step that asked for the plan.
     pub step: u32,
-    /// The body at each posture of the path `[x, y, yaw]`, world frame, metres and radians.
+    /// The body at each posture of the path (RRT-Connect) or the CG at each cell of the
+    /// route (CG-space), `[x, y, yaw]`, world frame, metres and radians.
     pub path: Vec<[f64; 3]>,
     /// Every planned foothold `[x, y]` (contact-sphere centres), world frame, metres.
     pub footholds: Vec<[f64; 2]>,
@@ -76,9 +77,9 @@ pub struct RoutePlanned {
     pub start_tree: Vec<[f64; 4]>,
     /// The goal tree's edges `[x0, y0, x1, y1]`.
     pub goal_tree: Vec<[f64; 4]>,
-    /// Nodes of both trees.
+    /// Nodes of both trees (RRT-Connect) or of the foot-level search (CG-space).
     pub nodes: u64,
-    /// Iterations of the search.
+    /// Iterations of the search (RRT-Connect) or routes planned (CG-space).
     pub iterations: u64,
     /// Length of the body's path over the ground, metres.
     pub length_m: f64,
@@ -88,6 +89,25 @@ pub struct RoutePlanned {
 message!(RoutePlanned: inform "legged.routePlanned");
 
 impl RoutePlanned {
+    /// The inform for a CG-space plan, planned at step `step` in `elapsed`.
+    pub fn of_cg_space(
+        step: u32,
+        plan: &crate::cg_steps::CgPlanned,
+        elapsed: std::time::Duration,
+    ) -> Self {
+        RoutePlanned {
+            step,
+            path: plan.route.clone(),
+            footholds: plan.footholds.clone(),
+            start_tree: Vec::new(),
+            goal_tree: Vec::new(),
+            nodes: plan.nodes as u64,
+            iterations: plan.routes as u64,
+            length_m: plan.length_m,
+            planning_ms: elapsed.as_secs_f64() * 1e3,
+        }
+    }
+
     /// The inform for `plan`, planned at step `step` in `elapsed`.
     pub fn of(step: u32, plan: &tca_rrt::Plan, elapsed: std::time::Duration) -> Self {
         let edges = |tree: &[(nalgebra::Point2<f64>, nalgebra::Point2<f64>)]| {

@@ -48,6 +48,8 @@ pub enum LeggedPlanner {
     FreeGait,
     /// The integrated RRT-Connect planner over the whole terrain, in this gait.
     Rrt(tca_rrt::Gait),
+    /// CG-space route and footfall planning over the whole terrain.
+    CgSpace,
 }
 
 impl LeggedPlanner {
@@ -61,8 +63,12 @@ impl LeggedPlanner {
             ("rrt", g) => tca_rrt::Gait::from_name(g.unwrap_or("tripod"))
                 .map(LeggedPlanner::Rrt)
                 .map_err(|e| e.to_string()),
+            ("cgspace", None) => Ok(LeggedPlanner::CgSpace),
+            ("cgspace", Some(g)) => Err(format!(
+                "CG-space planning chooses its own foot order; a gait ({g}) is for --planner rrt"
+            )),
             (other, _) => Err(format!(
-                "no planner named {other:?}: the planners are free (the free gait) and rrt (RRT-Connect)"
+                "no planner named {other:?}: the planners are free (the free gait), rrt (RRT-Connect) and cgspace (CG-space)"
             )),
         }
     }
@@ -72,6 +78,7 @@ impl LeggedPlanner {
         match self {
             LeggedPlanner::FreeGait => "free gait".to_owned(),
             LeggedPlanner::Rrt(g) => format!("RRT-Connect ({} gait)", g.name()),
+            LeggedPlanner::CgSpace => "CG-space".to_owned(),
         }
     }
 }
@@ -152,6 +159,15 @@ pub async fn connect_module(
                         seed: setup.seed,
                         ..tca_rrt::RrtParams::default()
                     },
+                };
+            }
+            if setup.planner == LeggedPlanner::CgSpace {
+                let mut params = tca_cg_space::PlanParams::default();
+                params.route.seed = setup.seed;
+                config.planner = crate::gait_module::StepPlanner::CgSpace {
+                    terrain: setup.terrain.clone(),
+                    cg: tca_cg_space::CgParams::default(),
+                    params,
                 };
             }
             crate::gait_module::connect(connector, config).await
