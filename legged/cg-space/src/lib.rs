@@ -34,6 +34,7 @@
 //! ```
 
 pub mod astar;
+pub mod distribute;
 pub mod error;
 pub mod footmap;
 pub mod footplan;
@@ -45,6 +46,10 @@ pub mod space;
 pub mod validity;
 
 pub use astar::{AStarResult, Block, astar};
+pub use distribute::{
+    BatchParams, BatchedRouteError, JoinError, JoinQuery, Joiner, Joins, LocalJoiner, Partition,
+    fingerprint, plan_route_batched, roadmap_batched,
+};
 pub use error::CgError;
 pub use footmap::FootMap;
 pub use footplan::{FootCell, FootPlan, FootSearch, FootStep, SearchParams, Stance};

@@ -135,6 +135,24 @@ pub fn plan_route(
     goal: CgCell,
     params: &RouteParams,
 ) -> Result<Route, CgError> {
+    if let Some(route) = route_ends(space, start, goal, params)? {
+        return Ok(route);
+    }
+    if let Some(route) = roadmap(space, start, goal, params) {
+        return Ok(route);
+    }
+    flood_fallback(space, start, goal, params)
+}
+
+/// What every route planner does before its roadmap: both ends checked, the trivial route,
+/// and the flood of `flood_budget` cells from each end, which finds short routes and proves
+/// enclosed ends unreachable. `Ok(None)`: the roadmap is needed.
+pub(crate) fn route_ends(
+    space: &mut CgSpace,
+    start: CgCell,
+    goal: CgCell,
+    params: &RouteParams,
+) -> Result<Option<Route>, CgError> {
     for (what, c) in [("start", start), ("goal", goal)] {
         if !space.is_valid(c) {
             return Err(CgError::InvalidEndpoint {
@@ -147,33 +165,36 @@ pub fn plan_route(
         }
     }
     if start == goal {
-        return Ok(Route {
+        return Ok(Some(Route {
             cells: vec![start],
             draws: 0,
             searches: 0,
             points: 1,
-        });
+        }));
     }
     match flood(space, start, goal, params.flood_budget) {
-        Flood::Met(cells) => {
-            return Ok(Route {
-                cells,
-                draws: 0,
-                searches: 0,
-                points: 2,
-            });
-        }
-        Flood::Enclosed { enclosed, cells } => {
-            return Err(CgError::Unreachable {
-                enclosed,
-                explored: cells,
-            });
-        }
-        Flood::Budget => {}
+        Flood::Met(cells) => Ok(Some(Route {
+            cells,
+            draws: 0,
+            searches: 0,
+            points: 2,
+        })),
+        Flood::Enclosed { enclosed, cells } => Err(CgError::Unreachable {
+            enclosed,
+            explored: cells,
+        }),
+        Flood::Budget => Ok(None),
     }
-    if let Some(route) = roadmap(space, start, goal, params) {
-        return Ok(route);
-    }
+}
+
+/// What every route planner does when its roadmap ran out of draws: a whole-map flood
+/// decides, a route or proof that there is none.
+pub(crate) fn flood_fallback(
+    space: &mut CgSpace,
+    start: CgCell,
+    goal: CgCell,
+    params: &RouteParams,
+) -> Result<Route, CgError> {
     match flood(space, start, goal, usize::MAX) {
         Flood::Met(cells) => Ok(Route {
             cells,
