@@ -39,6 +39,7 @@ pub mod error;
 pub mod footmap;
 pub mod footplan;
 pub mod grid;
+pub mod picture;
 pub mod planner;
 pub mod robot;
 pub mod route;
@@ -54,6 +55,10 @@ pub use error::CgError;
 pub use footmap::FootMap;
 pub use footplan::{FootCell, FootPlan, FootSearch, FootStep, SearchParams, Stance};
 pub use grid::{CgCell, CgGrid};
+pub use picture::{
+    Layout, PictureError, PictureOptions, draw_cg_space, footfalls, start_stance, stances,
+    write_cg_space_png,
+};
 pub use planner::{Plan, PlanParams, plan};
 pub use robot::{CgParams, CgRobot};
 pub use route::{Flood, Route, RouteParams, flood, plan_route, roadmap};
