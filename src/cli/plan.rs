@@ -1,13 +1,18 @@
 //! `tca plan rrt`: the integrated RRT-Connect motion planner for a multi-legged robot,
-//! planning without walking.
+//! planning without walking; `tca plan cgspace`: the CG-space route and footfall planner.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Arc;
+use std::time::Instant;
 
 use anyhow::Context as _;
 use clap::{Args, Subcommand};
 use serde_json::json;
+use tca_cg_space::{
+    CgError, CgParams, CgRobot, CgSpace, FootStep, Layout, PictureOptions, PlanParams,
+    write_cg_space_png,
+};
 use tca_legged_courses::Course;
 use tca_legged_courses::walls::WallsChecks;
 use tca_legged_model::RobotModel;
@@ -28,6 +33,55 @@ pub(crate) enum PlanCommand {
   tca plan rrt --robot hexapod --terrain walls.asc --from 0.5,0 --to 4.5,0 --json
   tca plan rrt --robot hexapod --terrain hexapod-walls --seeds 1..10")]
     Rrt(RrtArgs),
+    /// Plan a route for the centre of gravity through CG-space and the footfalls along it
+    /// (after Eldershaw and Yim): report the route, the foot moves and the work done, and
+    /// optionally draw the footmap, the invalid CG cells, the route and the footfalls.
+    #[command(after_help = "Examples:
+  tca plan cgspace --robot ambler --terrain cliff --png out/
+  tca plan cgspace --robot ambler --terrain cliff --theta 0 --json
+  tca plan cgspace --robot spider --terrain flat --from 4,0 --to 12,0
+  tca plan cgspace --robot ambler --terrain walled-goal        # no route: exit status 2
+  tca plan cgspace --robot robot.urdf --terrain field.asc --from 2,2 --to 20,5,1.57 --seeds 1..5
+
+The picture (DIR/cgspace-SEED.png) shows the elevation in grey, foot cells without traction
+as red circles, invalid CG cells in black (--theta all: black where every heading is
+invalid, dark grey where some are), the route in blue, footfalls as yellow crosses and the
+start and goal in green. Exit status 2 when some seed found no plan.")]
+    Cgspace(CgSpaceArgs),
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct CgSpaceArgs {
+    /// The robot: a shipped one (ambler, hexapod, athlete, spider, polybot6, polybot8; see
+    /// `tca robot list`) or a URDF file.
+    #[arg(long)]
+    robot: String,
+    /// The terrain: a built-in course's name (`tca course list`) or an .asc file.
+    #[arg(long)]
+    terrain: String,
+    /// Where the centre of gravity starts, X,Y or X,Y,HEADING (world metres, radians); a
+    /// course's start by default.
+    #[arg(long)]
+    from: Option<String>,
+    /// Where it should end, X,Y or X,Y,HEADING; a course's goal by default (the heading
+    /// defaults to the start's).
+    #[arg(long)]
+    to: Option<String>,
+    /// Seed of the roadmap's random points (and of a built-in course).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Plan once for each seed of FIRST..LAST and print a line each and the median time.
+    #[arg(long)]
+    seeds: Option<String>,
+    /// Draw the CG-space and the plan as DIR/cgspace-SEED.png.
+    #[arg(long, value_name = "DIR")]
+    png: Option<PathBuf>,
+    /// The heading bin whose invalid CG cells the picture shows, or `all`.
+    #[arg(long, default_value = "all", value_name = "all|BIN")]
+    theta: String,
+    /// Print each plan as one JSON line.
+    #[arg(long)]
+    json: bool,
 }
 
 #[derive(Debug, Args)]
@@ -68,6 +122,7 @@ pub(crate) struct RrtArgs {
 pub(crate) async fn run(command: PlanCommand) -> anyhow::Result<ExitCode> {
     match command {
         PlanCommand::Rrt(args) => run_rrt(args),
+        PlanCommand::Cgspace(args) => run_cgspace(args),
     }
 }
 
@@ -259,4 +314,281 @@ fn parse_seeds(text: &str) -> anyhow::Result<std::ops::RangeInclusive<u64>> {
         return Err(bad());
     }
     Ok(a..=b)
+}
+
+/// Parses `--theta`: `all` (every heading) or a heading bin.
+fn parse_theta(text: &str) -> anyhow::Result<Option<u16>> {
+    if text.trim().eq_ignore_ascii_case("all") {
+        return Ok(None);
+    }
+    text.trim().parse::<u16>().map(Some).map_err(|_| {
+        anyhow::anyhow!(
+            "--theta {text:?} is neither `all` nor a heading bin number; give e.g. --theta 0"
+        )
+    })
+}
+
+/// Refuses a place outside the CG-space's map, naming the option.
+fn check_inside(
+    option: &str,
+    what: &'static str,
+    grid: &tca_cg_space::CgGrid,
+    p: Point2<f64>,
+) -> anyhow::Result<()> {
+    if grid.cell_of(p, 0.0).is_some() {
+        return Ok(());
+    }
+    let e = CgError::OutsideMap {
+        what,
+        x: p.x,
+        y: p.y,
+        x_min: grid.origin.x,
+        x_max: grid.origin.x + f64::from(grid.nx) * grid.cell_m,
+        y_min: grid.origin.y,
+        y_max: grid.origin.y + f64::from(grid.ny) * grid.cell_m,
+    };
+    anyhow::bail!("--{option} {},{}: {e}", p.x, p.y)
+}
+
+fn run_cgspace(args: CgSpaceArgs) -> anyhow::Result<ExitCode> {
+    let model = RobotModel::load(&args.robot)
+        .map_err(|e| anyhow::anyhow!("--robot {}: {e}", args.robot))?;
+    let theta = parse_theta(&args.theta)?;
+    let seeds = match &args.seeds {
+        Some(text) => parse_seeds(text)?,
+        None => args.seed..=args.seed,
+    };
+    let from = args
+        .from
+        .as_deref()
+        .map(|t| parse_place("from", t, true))
+        .transpose()?;
+    let to = args
+        .to
+        .as_deref()
+        .map(|t| parse_place("to", t, true))
+        .transpose()?;
+    if let Some(dir) = &args.png {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the directory {}", dir.display()))?;
+    }
+    let campaign = args.seeds.is_some();
+    // The robot's tables depend on the terrain's resolution only: built once per resolution.
+    let mut robot: Option<(f64, Arc<CgRobot>)> = None;
+    let mut times = Vec::new();
+    let (mut planned, mut total) = (0, 0);
+    for seed in seeds {
+        total += 1;
+        let (field, course) = terrain_of(&args.terrain, seed)?;
+        let start = match (&from, course) {
+            (Some(v), _) => [v[0], v[1], v.get(2).copied().unwrap_or(0.0)],
+            (None, Some((s, _))) => s,
+            (None, None) => anyhow::bail!("--from X,Y is needed with a terrain file"),
+        };
+        let goal = match (&to, course) {
+            (Some(v), _) => [v[0], v[1], v.get(2).copied().unwrap_or(start[2])],
+            (None, Some((_, g))) => [g[0], g[1], start[2]],
+            (None, None) => anyhow::bail!("--to X,Y is needed with a terrain file"),
+        };
+        let built = Instant::now();
+        let res = field.grid().resolution_m();
+        let tables = match &robot {
+            Some((r, t)) if *r == res => t.clone(),
+            _ => {
+                let t = Arc::new(
+                    CgRobot::new(&model, res, CgParams::default())
+                        .map_err(|e| anyhow::anyhow!("--robot {}: {e}", args.robot))?,
+                );
+                robot = Some((res, t.clone()));
+                t
+            }
+        };
+        let mut space = CgSpace::new(tables.clone(), &field)
+            .map_err(|e| anyhow::anyhow!("--terrain {}: {e}", args.terrain))?;
+        let space_s = built.elapsed().as_secs_f64();
+        let grid = *space.grid();
+        check_inside("from", "the start", &grid, Point2::new(start[0], start[1]))?;
+        check_inside("to", "the goal", &grid, Point2::new(goal[0], goal[1]))?;
+        let picture = PictureOptions {
+            theta,
+            start: Some(Point2::new(start[0], start[1])),
+            goal: Some(Point2::new(goal[0], goal[1])),
+            label: Some(format!("{} {} seed {seed}", args.robot, args.terrain)),
+            ..PictureOptions::default()
+        };
+        Layout::new(&grid, &picture).map_err(|e| anyhow::anyhow!("--theta {}: {e}", args.theta))?;
+        let mut params = PlanParams::default();
+        params.route.seed = seed;
+        let began = Instant::now();
+        let result = tca_cg_space::plan(
+            &mut space,
+            (Point2::new(start[0], start[1]), start[2]),
+            (Point2::new(goal[0], goal[1]), goal[2]),
+            None,
+            &params,
+        );
+        let time_s = began.elapsed().as_secs_f64();
+        let work = CgWork {
+            evaluated: space.evaluations(),
+            regions: space.regions_materialised(),
+            time_s,
+            space_s,
+        };
+        match &result {
+            Ok(plan) => {
+                planned += 1;
+                times.push(time_s);
+                if args.json {
+                    println!("{}", cg_plan_json(seed, &space, plan, &work));
+                } else {
+                    println!(
+                        "seed {seed}: route of {} cells, {:.2} m; {} foot moves, {} search nodes, {} routes planned, {} cells marked; {} CG cells evaluated in {} regions; planned in {:.3} s (CG-space built in {:.3} s)",
+                        plan.feet.route.len(),
+                        route_length_m(&grid, &plan.feet.route),
+                        foot_moves(plan),
+                        plan.feet.nodes,
+                        plan.routes,
+                        plan.marked.len(),
+                        work.evaluated,
+                        work.regions,
+                        work.time_s,
+                        work.space_s,
+                    );
+                }
+            }
+            Err(e) => {
+                let unreachable = matches!(e, CgError::Unreachable { .. });
+                if args.json {
+                    println!(
+                        "{}",
+                        json!({
+                            "seed": seed,
+                            "planned": false,
+                            "unreachable": unreachable,
+                            "reason": e.to_string(),
+                            "cg_cells_evaluated": work.evaluated,
+                            "regions_materialised": work.regions,
+                            "time_s": work.time_s,
+                        })
+                    );
+                } else {
+                    let what = if e.to_string().starts_with("no route") {
+                        String::new()
+                    } else {
+                        "no plan: ".to_owned()
+                    };
+                    println!(
+                        "seed {seed}: {what}{e} ({} CG cells evaluated in {} regions, {:.3} s)",
+                        work.evaluated, work.regions, work.time_s
+                    );
+                }
+            }
+        }
+        if let Some(dir) = &args.png {
+            let path = dir.join(format!("cgspace-{seed}.png"));
+            write_cg_space_png(&path, &mut space, &picture, result.as_ref().ok())
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            if !args.json {
+                println!("seed {seed}: picture {}", path.display());
+            }
+        }
+    }
+    if campaign && !args.json {
+        times.sort_by(f64::total_cmp);
+        match times.get(times.len() / 2) {
+            Some(median) => println!(
+                "planned {planned} of {total}; median planning time of the plans {median:.3} s"
+            ),
+            None => println!("planned 0 of {total}"),
+        }
+    }
+    Ok(if planned == total {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(2)
+    })
+}
+
+/// The CG-space's work for one plan.
+struct CgWork {
+    evaluated: u64,
+    regions: u64,
+    time_s: f64,
+    space_s: f64,
+}
+
+/// The route's length over the ground: its cells' centres joined, metres.
+fn route_length_m(grid: &tca_cg_space::CgGrid, route: &[tca_cg_space::CgCell]) -> f64 {
+    route
+        .windows(2)
+        .map(|w| (grid.centre(w[1].ix, w[1].iy) - grid.centre(w[0].ix, w[0].iy)).norm())
+        .sum()
+}
+
+/// Foot moves of a plan: feet placed, moved or lifted (not the CG's advances).
+fn foot_moves(plan: &tca_cg_space::Plan) -> usize {
+    plan.feet
+        .steps
+        .iter()
+        .filter(|s| !matches!(s, FootStep::Advance { .. }))
+        .count()
+}
+
+fn cg_plan_json(
+    seed: u64,
+    space: &CgSpace,
+    plan: &tca_cg_space::Plan,
+    work: &CgWork,
+) -> serde_json::Value {
+    let grid = space.grid();
+    let legs = &space.robot().leg_names;
+    let at = |f: (i32, i32)| {
+        let p = grid.centre(f.0, f.1);
+        [p.x, p.y]
+    };
+    let route: Vec<[f64; 3]> = plan
+        .feet
+        .route
+        .iter()
+        .map(|c| {
+            let p = grid.centre(c.ix, c.iy);
+            [p.x, p.y, grid.theta(c.it)]
+        })
+        .collect();
+    let footfalls: Vec<serde_json::Value> = plan
+        .feet
+        .steps
+        .iter()
+        .filter_map(|s| match *s {
+            FootStep::Place { leg, to, .. } => {
+                let [x, y] = at(to);
+                Some(json!({ "leg": legs.get(leg), "x": x, "y": y }))
+            }
+            _ => None,
+        })
+        .collect();
+    let stances: Vec<Vec<Option<[f64; 2]>>> = tca_cg_space::stances(plan)
+        .iter()
+        .map(|s| s.feet.iter().map(|f| f.map(at)).collect())
+        .collect();
+    json!({
+        "seed": seed,
+        "planned": true,
+        "route_cells": plan.feet.route.len(),
+        "route_length_m": route_length_m(grid, &plan.feet.route),
+        "foot_moves": foot_moves(plan),
+        "search_nodes": plan.feet.nodes,
+        "routes_planned": plan.routes,
+        "cells_marked": plan.marked.len(),
+        "cg_cells_evaluated": work.evaluated,
+        "regions_materialised": work.regions,
+        "time_s": work.time_s,
+        "space_s": work.space_s,
+        "cell_m": grid.cell_m,
+        "theta_bins": grid.theta_bins,
+        "legs": legs,
+        "route": route,
+        "footfalls": footfalls,
+        "stances": stances,
+    })
 }
