@@ -9,7 +9,7 @@ use tca_module::Connector;
 use super::ConnectArgs;
 
 /// Names of the built-in modules: the echo of `tca ping`, the six walking modules of the
-/// single leg and the four of a multi-legged robot.
+/// single leg, the four of a multi-legged robot and the CG-space route planner's worker.
 pub(crate) const BUILTIN_MODULES: &[&str] = &[
     "echo",
     "controller",
@@ -22,13 +22,15 @@ pub(crate) const BUILTIN_MODULES: &[&str] = &[
     "legged-ism",
     "legged-ltm",
     "legged-gait",
+    "cgspace-worker",
 ];
 
 #[derive(Debug, Args)]
 pub(crate) struct ModuleArgs {
     /// The built-in module to run: echo; the single leg's controller, ism, ltm, pdm, lrp or
     /// gait; a multi-legged robot's legged-controller, legged-ism, legged-ltm or
-    /// legged-gait (with --robot).
+    /// legged-gait (with --robot); cgspace-worker (with --index, --robot and --terrain or
+    /// --course), one worker of the distributed CG-space route planner.
     name: String,
     #[command(flatten)]
     connect: ConnectArgs,
@@ -60,9 +62,18 @@ pub(crate) struct ModuleArgs {
     /// With --planner rrt: `tripod` (default) or `wave`.
     #[arg(long, value_name = "tripod|wave")]
     gait: Option<String>,
-    /// The terrain from an ESRI ASCII grid (.asc) file instead.
+    /// The terrain from an ESRI ASCII grid (.asc) file instead (cgspace-worker: a built-in
+    /// course's name or an .asc file).
     #[arg(long, value_name = "FILE.asc")]
     terrain: Option<std::path::PathBuf>,
+    /// cgspace-worker: which worker this is, 0 to N-1 for a planner with N workers (it
+    /// answers the joins of strip K of CG-space, as module cgspace-worker-K).
+    #[arg(long, value_name = "K")]
+    index: Option<usize>,
+    /// cgspace-worker: most CG-space regions (16 x 16 cells, every heading) held at once;
+    /// beyond it the least recently used is dropped and recomputed when needed again.
+    #[arg(long, value_name = "N")]
+    region_cap: Option<usize>,
     /// Seed of the random course and of the scanner noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -104,6 +115,15 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
         .or_else(|| std::env::var("TCA_CONNECT").ok())
         .unwrap_or_else(|| args.connect.endpoint_or_default());
     let connector = Connector::endpoint(endpoint.clone());
+    if args.name == "cgspace-worker" {
+        return run_cgspace_worker(&args, &connector, &endpoint).await;
+    }
+    if args.index.is_some() || args.region_cap.is_some() {
+        anyhow::bail!(
+            "--index and --region-cap are for the CG-space worker (tca module cgspace-worker), not {}",
+            args.name
+        );
+    }
     if let Some(inner) = args.name.strip_prefix("legged-") {
         let Some(robot) = &args.robot else {
             anyhow::bail!(
@@ -162,6 +182,46 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
     }
     .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
     serve(module, &args.name, &endpoint).await
+}
+
+/// `tca module cgspace-worker --index K --robot R --terrain F`: builds its CG-space (the
+/// robot's tables on the terrain; the seed builds a course) and serves its strip's joins.
+async fn run_cgspace_worker(
+    args: &ModuleArgs,
+    connector: &Connector,
+    endpoint: &str,
+) -> anyhow::Result<ExitCode> {
+    let Some(index) = args.index else {
+        anyhow::bail!(
+            "the CG-space worker needs its index: --index K (0 to N-1 for a planner with N workers)"
+        );
+    };
+    let Some(robot) = args.robot.clone() else {
+        anyhow::bail!("the CG-space worker needs the planner's robot: --robot NAME|FILE.urdf");
+    };
+    let terrain = match (&args.terrain, &args.course) {
+        (Some(path), _) => path.to_string_lossy().into_owned(),
+        (None, Some(course)) => course.clone(),
+        (None, None) => anyhow::bail!(
+            "the CG-space worker needs the planner's terrain: --terrain COURSE|FILE.asc (and --seed for a course)"
+        ),
+    };
+    let setup = tca_cg_space_bus::WorkerSetup {
+        robot,
+        terrain: tca_cg_space_bus::TerrainSource::parse(&terrain, args.seed),
+        params: tca_cg_space::CgParams::default(),
+        region_cap: args.region_cap,
+    };
+    let built = setup.clone();
+    let space = tokio::task::spawn_blocking(move || built.space())
+        .await
+        .context("the CG-space worker's set-up stopped")?
+        .with_context(|| format!("cgspace-worker {index} cannot be set up"))?;
+    let name = tca_cg_space_bus::worker_name(index);
+    let module = tca_cg_space_bus::connect_worker(connector, index, space, setup.region_cap)
+        .await
+        .with_context(|| format!("module {name} cannot join central at {endpoint}"))?;
+    serve(module, &name, endpoint).await
 }
 
 /// Runs a connected module until Ctrl-C or until central closes its link.

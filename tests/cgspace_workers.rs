@@ -1,0 +1,148 @@
+//! CG-space workers as processes over zenoh on loopback: `tca module cgspace-worker` answers
+//! the roadmap's joins for a planner in this process, and the route is the one planned
+//! locally; a worker process that is killed is started again.
+
+mod common;
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use common::*;
+use tca_cg_space::{
+    BatchParams, CgCell, CgParams, CgRobot, CgSpace, LocalJoiner, RouteParams, plan_route_batched,
+};
+use tca_cg_space_bus::{DistributedJoiner, JoinerOptions, ProcessWorkers, worker_name};
+use tca_legged_courses::Course;
+use tca_legged_model::RobotModel;
+use tca_module::{Connector, Module};
+
+fn cliff() -> (CgSpace, CgCell, CgCell) {
+    let course = Course::builtin("cliff", 1).expect("the cliff course");
+    let model = RobotModel::builtin("ambler").expect("the Ambler");
+    let robot = CgRobot::new(
+        &model,
+        course.terrain.grid().resolution_m(),
+        CgParams::default(),
+    )
+    .expect("tables");
+    let space = CgSpace::new(Arc::new(robot), &course.terrain).expect("a space");
+    let grid = *space.grid();
+    let s = grid
+        .cell_of(
+            tca_rrt::nalgebra::Point2::new(course.start.x_m, course.start.y_m),
+            0.0,
+        )
+        .expect("start");
+    let g = grid.cell_of(course.goal, 0.0).expect("goal");
+    (space, s, g)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn worker_processes_over_zenoh_answer_the_joins() {
+    let endpoint = free_endpoint();
+    let _central = spawn_tca(&["central", "--listen", &endpoint]);
+    let connector = Connector::endpoint(endpoint.clone());
+    let planner = retry("the planner joins central", || async {
+        Module::builder("cgspace-planner")
+            .connect(&connector)
+            .await
+            .map_err(|e| e.to_string())
+    })
+    .await;
+    let args: Vec<String> = [
+        "module",
+        "cgspace-worker",
+        "--connect",
+        &endpoint,
+        "--robot",
+        "ambler",
+        "--terrain",
+        "cliff",
+        "--seed",
+        "1",
+        "--region-cap",
+        "24",
+    ]
+    .iter()
+    .map(|s| (*s).to_owned())
+    .collect();
+    let workers = ProcessWorkers::new(env!("CARGO_BIN_EXE_tca"), args);
+    let joiner = within(
+        "two worker processes join central",
+        DistributedJoiner::start(
+            planner.clone(),
+            2,
+            workers.clone(),
+            JoinerOptions::default(),
+        ),
+    )
+    .await
+    .expect("two worker processes");
+    let registry = planner.registry().await.expect("the registry");
+    for k in 0..2 {
+        assert!(
+            registry
+                .modules
+                .iter()
+                .any(|m| m.as_str() == worker_name(k)),
+            "{registry:?}"
+        );
+    }
+
+    let (space, s, g) = cliff();
+    let mut local_space = space.clone();
+    let local = plan_route_batched(
+        &mut local_space,
+        &mut LocalJoiner,
+        s,
+        g,
+        &RouteParams::default(),
+        &BatchParams::default(),
+    )
+    .expect("a local route");
+
+    // Plan once; then kill worker 1's process and plan again with the same joiner.
+    let plan_with = |mut joiner: DistributedJoiner, mut space: CgSpace| {
+        tokio::task::spawn_blocking(move || {
+            let r = plan_route_batched(
+                &mut space,
+                &mut joiner,
+                s,
+                g,
+                &RouteParams::default(),
+                &BatchParams::default(),
+            );
+            (r, joiner)
+        })
+    };
+    let (route, joiner) = within_for(
+        Duration::from_secs(60),
+        "the route over two worker processes",
+        plan_with(joiner, space.clone()),
+    )
+    .await
+    .expect("the planning thread");
+    assert_eq!(route.expect("a route"), local);
+    let stats = joiner.stats();
+    assert_eq!(stats.replacements, 0, "{stats:?}");
+    assert!(stats.queries_per_worker.iter().all(|&q| q > 0), "{stats:?}");
+    assert!(
+        stats.workers.iter().all(|w| w.regions_held <= 24),
+        "{stats:?}"
+    );
+
+    let pid = workers.pid(1).expect("worker 1's pid");
+    let _ = std::process::Command::new("kill")
+        .args(["-KILL", &pid.to_string()])
+        .status();
+    let (route, joiner) = within_for(
+        Duration::from_secs(60),
+        "the route after a worker process was killed",
+        plan_with(joiner, space),
+    )
+    .await
+    .expect("the planning thread");
+    assert_eq!(route.expect("a route after the kill"), local);
+    let stats = joiner.shutdown().await;
+    assert_eq!(stats.replacements, 1, "{stats:?}");
+}
