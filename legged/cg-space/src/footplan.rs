@@ -123,6 +123,23 @@ pub struct SearchFailure {
     pub nodes: usize,
 }
 
+/// A check of each move the search considers, beyond CG-space's own tests: for example
+/// that the real robot can carry it out (reach along the way, contacts between its legs,
+/// its parts against the terrain). The search calls it before it enters a stance, with the
+/// route cells of both stances; a move it refuses is not taken from that stance.
+pub trait MoveCheck {
+    /// Whether the move `step` from `from` (at route cell `from_cell`) to `to` (at
+    /// `to_cell`) can be carried out.
+    fn check(
+        &self,
+        from: &Stance,
+        from_cell: CgCell,
+        step: &FootStep,
+        to: &Stance,
+        to_cell: CgCell,
+    ) -> bool;
+}
+
 /// A leg's reach at a foot cell: the lowest and highest contact-centre heights (body z) and
 /// the quadrant (see [`RangeCell`](crate::robot::RangeCell)).
 type Reach = (f64, f64, u8);
@@ -136,6 +153,7 @@ pub struct FootSearch<'a> {
     /// Per heading bin and leg: the range as a dense square of side `2 * half + 1`.
     lookup: Vec<Vec<Vec<Option<Reach>>>>,
     half: i32,
+    check: Option<&'a dyn MoveCheck>,
 }
 
 impl<'a> FootSearch<'a> {
@@ -187,7 +205,14 @@ impl<'a> FootSearch<'a> {
             params,
             lookup,
             half,
+            check: None,
         }
+    }
+
+    /// The search with a check of every move it considers.
+    pub fn with_check(mut self, check: Option<&'a dyn MoveCheck>) -> Self {
+        self.check = check;
+        self
     }
 
     /// Leg `leg`'s reach interval and quadrant for a foot cell seen from route cell `k`.
@@ -501,9 +526,26 @@ impl<'a> FootSearch<'a> {
             }
             let mut child = top.stance.clone();
             apply(&mut child, &step);
-            if !visited.insert(child.clone()) {
+            if visited.contains(&child) {
                 continue;
             }
+            if let Some(check) = self.check
+                && !check.check(
+                    &top.stance,
+                    self.route[top.stance.k],
+                    &step,
+                    &child,
+                    self.route[child.k],
+                )
+            {
+                // A refused move costs the budget as an expanded node does.
+                stall += 1;
+                if stall > self.params.stall_nodes {
+                    break;
+                }
+                continue;
+            }
+            visited.insert(child.clone());
             nodes += 1;
             path.push(step);
             if child.k >= last {

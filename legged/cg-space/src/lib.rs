@@ -53,13 +53,15 @@ pub use distribute::{
 };
 pub use error::CgError;
 pub use footmap::FootMap;
-pub use footplan::{FootCell, FootPlan, FootSearch, FootStep, SearchParams, Stance};
+pub use footplan::{
+    FootCell, FootPlan, FootSearch, FootStep, MoveCheck, SearchParams, Stance, apply as apply_step,
+};
 pub use grid::{CgCell, CgGrid};
 pub use picture::{
-    Layout, PictureError, PictureOptions, draw_cg_space, footfalls, start_stance, stances,
+    Layout, PictureError, PictureOptions, draw_cg_space, footfalls, stances, start_stance,
     write_cg_space_png,
 };
-pub use planner::{Plan, PlanParams, plan};
+pub use planner::{Plan, PlanParams, plan, plan_checked};
 pub use robot::{CgParams, CgRobot};
 pub use route::{Flood, Route, RouteParams, flood, plan_route, roadmap};
 pub use space::{CgSpace, REGION_CELLS};

@@ -6,7 +6,9 @@ use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 
 use crate::error::CgError;
-use crate::footplan::{FootCell, FootPlan, FootSearch, FootStep, SearchParams, Stance, apply};
+use crate::footplan::{
+    FootCell, FootPlan, FootSearch, FootStep, MoveCheck, SearchParams, Stance, apply,
+};
 use crate::grid::CgCell;
 use crate::route::{Route, RouteParams, plan_route};
 use crate::space::CgSpace;
@@ -54,6 +56,19 @@ pub fn plan(
     feet: Option<&[Option<Point2<f64>>]>,
     params: &PlanParams,
 ) -> Result<Plan, CgError> {
+    plan_checked(space, start, goal, feet, params, None)
+}
+
+/// [`plan`] with every move the foot-level search considers also put to `check` (see
+/// [`MoveCheck`]).
+pub fn plan_checked(
+    space: &mut CgSpace,
+    start: (Point2<f64>, f64),
+    goal: (Point2<f64>, f64),
+    feet: Option<&[Option<Point2<f64>>]>,
+    params: &PlanParams,
+    check: Option<&dyn MoveCheck>,
+) -> Result<Plan, CgError> {
     let grid = *space.grid();
     let cell = |what: &'static str, p: Point2<f64>, theta: f64| {
         grid.cell_of(p, theta).ok_or_else(|| {
@@ -85,8 +100,9 @@ pub fn plan(
             .collect::<Vec<Option<FootCell>>>(),
     });
     let initial = stance.clone();
+    let mut first_stance: Option<Stance> = initial.clone();
     loop {
-        let search = FootSearch::new(space, &route, params.search.clone());
+        let search = FootSearch::new(space, &route, params.search.clone()).with_check(check);
         let from = match &stance {
             Some(s) => s.clone(),
             None => search
@@ -96,19 +112,13 @@ pub fn plan(
                     detail: "no stance at the start holds the CG".into(),
                 })?,
         };
-        let start_stance = initial.clone().unwrap_or_else(|| {
-            if kept.is_empty() {
-                from.clone()
-            } else {
-                stance.clone().unwrap_or_else(|| from.clone())
-            }
-        });
+        // The stance the whole plan starts from: the given one, else the first chosen.
+        let first = first_stance.get_or_insert_with(|| from.clone()).clone();
         match search.search(from.clone()) {
             Ok(mut found) => {
                 let mut steps = kept.clone();
                 steps.append(&mut found.steps);
-                let start_stance = if kept.is_empty() { from } else { start_stance };
-                let initial_stance = initial.clone().unwrap_or(start_stance);
+                let initial_stance = initial.clone().unwrap_or(first);
                 return Ok(Plan {
                     feet: FootPlan {
                         route,
@@ -181,6 +191,7 @@ pub fn plan(
                         route = r.cells;
                         kept.clear();
                         stance = initial.clone();
+                        first_stance = initial.clone();
                     }
                     Err(e) => return Err(e),
                 }

@@ -58,6 +58,28 @@ impl BodyMap {
         }
     }
 
+    /// Keeps only the bins whose eight neighbours hold something too: a foot cell's centre
+    /// in a kept bin is then inside the sampled workspace, not on its ragged edge.
+    fn erode(&mut self) {
+        let filled = |m: &BodyMap, x: usize, y: usize| {
+            let i = y * m.nx + x;
+            m.lo[i] <= m.hi[i]
+        };
+        let mut keep = vec![false; self.nx * self.ny];
+        for y in 1..self.ny.saturating_sub(1) {
+            for x in 1..self.nx.saturating_sub(1) {
+                keep[y * self.nx + x] =
+                    (y - 1..=y + 1).all(|yy| (x - 1..=x + 1).all(|xx| filled(self, xx, yy)));
+            }
+        }
+        for (i, k) in keep.iter().enumerate() {
+            if !k {
+                self.lo[i] = f64::INFINITY;
+                self.hi[i] = f64::NEG_INFINITY;
+            }
+        }
+    }
+
     /// The height interval at a body-frame point, if its bin holds anything.
     pub fn at(&self, p: Point2<f64>) -> Option<(f64, f64)> {
         let i = self.index(p)?;
@@ -142,6 +164,10 @@ pub struct CgParams {
     /// Least distance of the CG from the edge of the support polygon in the foot-level
     /// search, metres; `None`: a fifth of a cell.
     pub stability_margin_m: Option<f64>,
+    /// Leave out of each leg's range the bins on the edge of its sampled workspace (a bin
+    /// whose neighbours are not all reached), so that every foot cell in range can be
+    /// reached at its centre.
+    pub conservative_ranges: bool,
 }
 
 impl Default for CgParams {
@@ -152,6 +178,7 @@ impl Default for CgParams {
             traction_slope_rad: 30f64.to_radians(),
             clearance_m: 0.05,
             stability_margin_m: None,
+            conservative_ranges: true,
         }
     }
 }
@@ -234,6 +261,9 @@ impl CgRobot {
             let mut map = BodyMap::covering(min, max, bin);
             for p in &points {
                 map.add(Point2::new(p.x, p.y), p.z);
+            }
+            if params.conservative_ranges {
+                map.erode();
             }
             ranges.push(map);
         }

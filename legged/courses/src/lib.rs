@@ -6,7 +6,7 @@
 //! `slope`, `flat` and `rough`; two at the small hexapod's scale (about 3.5 x 1.5 m, 0.02 m
 //! cells, start (0.3, 0) facing +X, goal (3.2, 0)): `hexapod-rough` and `hexapod-flat`; and `hexapod-walls` (5 x 3 m, start (0.5, 0), goal
 //! (4.5, 0)), the mixed terrain with walls of Belter and Skrzypczyński's planning experiments;
-//! and two for CG-space planning at the Ambler's scale (30 x 20 m): `cliff` (a plateau too
+//! and two for CG-space planning at the Ambler's scale (30 x 26 m): `cliff` (a plateau too
 //! tall to step, a ramp to one side) and `walled-goal` (a goal no route reaches).
 //! `COURSES.md` next to this crate describes each one.
 //!
@@ -106,9 +106,9 @@ pub enum Course {
     /// Mixed terrain with a climbable 15 cm wall, an unclimbable 35 cm one and a steep
     /// hill to go round (hexapod, 5 x 3 m).
     HexapodWalls,
-    /// A 2.5 m plateau across the way with a ramp up to it on one side (Ambler, 30 x 20 m).
+    /// A 2.5 m plateau across the way with a ramp up to it on one side (Ambler, 30 x 26 m).
     Cliff,
-    /// The goal in a yard walled in by a 5 m cliff (Ambler, 30 x 20 m): unreachable.
+    /// The goal in a yard walled in by a 5 m cliff (Ambler, 30 x 26 m): unreachable.
     WalledGoal,
 }
 

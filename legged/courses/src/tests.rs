@@ -254,7 +254,7 @@ fn cliff_has_its_plateau_ramp_and_relief() {
         // The face: more than 2.4 m up within a cell, on the way from start to goal.
         assert!(h(14.05, 0.0) - h(13.9, 0.0) > 2.4);
         // The ramp rises evenly beside it; the relief stays within 5 cm.
-        assert!((h(10.0, 6.0) - 1.25).abs() <= 0.05 + 1e-9);
+        assert!((h(10.0, 7.0) - 1.25).abs() <= 0.05 + 1e-9);
         assert!((h(24.0, 0.0) - 2.5).abs() <= 0.05 + 1e-9);
         assert!(h(8.0, -5.0).abs() <= 0.05 + 1e-9);
     }

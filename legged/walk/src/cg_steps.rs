@@ -18,28 +18,40 @@
 //! The planner plans on the terrain it is given, as the paper's planner did on its height
 //! map of the whole terrain.
 
-use std::collections::VecDeque;
+use std::cell::{Cell, RefCell};
+use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use nalgebra::{Isometry3, Point2, Translation3, UnitQuaternion};
-use tca_cg_space::{CgCell, CgError, CgParams, CgSpace, FootStep, Plan, PlanParams, plan};
+use tca_cg_space::{
+    CgCell, CgError, CgGrid, CgParams, CgSpace, FootStep, MoveCheck, Plan, PlanParams, Stance,
+    apply_step, plan_checked,
+};
 use tca_free_gait::terrain::GridView;
 use tca_free_gait::{FreeGait, GaitParams, GaitState, StepPlan};
 use tca_legged_model::RobotModel;
 use tca_robot::HeightField;
 
-/// Plans tried from one place (each after marking what the last could not do) before the
-/// walk gives up there.
-const PLAN_ATTEMPTS: usize = 12;
 /// The robot is where a planned step starts when its body is within this share of a cell
 /// and every foot within [`FOOT_MATCH`] of one.
-const BODY_MATCH: f64 = 0.02;
+const BODY_MATCH: f64 = 0.05;
 /// See [`BODY_MATCH`].
-const FOOT_MATCH: f64 = 0.05;
+const FOOT_MATCH: f64 = 0.1;
 /// Body heights tried for an advance, as multiples of a tenth of the standing height
 /// about the planner's height.
 const HEIGHT_TRIES: [f64; 7] = [0.0, -0.5, 0.5, -1.0, 1.0, -1.5, 1.5];
+
+/// The CG-space layout for walking: one heading bin, so that the robot keeps its heading
+/// (the paper allows one bin, "no rotation"): with eight, a route may turn the body a whole
+/// bin (45°) between two cells, more than legs with their feet planted follow. The rest as
+/// [`CgParams::default`].
+pub fn walking_cg_params() -> CgParams {
+    CgParams {
+        theta_bins: Some(1),
+        ..CgParams::default()
+    }
+}
 
 /// Steps from the CG-space planner, planned once for the walk and again when the robot is
 /// not where they expected it.
@@ -81,16 +93,8 @@ pub struct CgPlanned {
     pub routes: usize,
     /// The route's length over the ground, metres.
     pub length_m: f64,
-    /// Cells and foot cells marked unusable so far by moves that could not be carried out.
-    pub marked_by_execution: usize,
-}
-
-/// What a move that cannot be carried out should mark.
-enum Unusable {
-    /// A foot cell.
-    Foot((i32, i32)),
-    /// A CG cell.
-    Cg(CgCell),
+    /// Moves the foot-level search considered that the robot could not carry out.
+    pub refused_moves: usize,
 }
 
 impl CgSteps {
@@ -109,6 +113,10 @@ impl CgSteps {
             cg.stability_margin_m = Some(1.5 * gait.min_margin_m);
         }
         let space = CgSpace::for_model(&model, &terrain, cg).map_err(|e| e.to_string())?;
+        // The real robot refuses some of the moves CG-space allows (its legs' links meet):
+        // more footholds per reason give the search others to try.
+        let mut params = params;
+        params.search.candidates = params.search.candidates.max(8);
         let lift_m = 3.0 * gait.clearance_m;
         let stand_m = model.neutral_height();
         Ok(CgSteps {
@@ -142,42 +150,27 @@ impl CgSteps {
         }
         queue.clear();
         let mut space = self.space.lock().unwrap_or_else(|p| p.into_inner());
-        let mut last_problem = String::new();
-        let mut marked = 0;
-        for attempt in 0..PLAN_ATTEMPTS {
-            let began = Instant::now();
-            let found = self.plan_from(&mut space, state, goal)?;
-            tracing::debug!(
-                attempt,
-                ms = began.elapsed().as_secs_f64() * 1e3,
-                steps = found.feet.steps.len(),
-                "CG-space planned the walk"
-            );
-            if found.feet.steps.is_empty() {
-                return Ok(None);
-            }
-            let (steps, problem) = self.steps_of(&space, &found, state);
-            let summary = self.summary(&space, &found, marked);
-            if let Some((why, unusable)) = problem {
-                tracing::debug!(attempt, problem = %why, kept = steps.len(), "a planned move cannot be carried out");
-                match unusable {
-                    Unusable::Foot((ix, iy)) => space.forbid_foot(ix, iy),
-                    Unusable::Cg(c) => space.mark_invalid(c),
-                }
-                marked += 1;
-                last_problem = why;
-            }
-            if !steps.is_empty() {
-                *queue = steps.into();
-                return Ok(queue.pop_front().map(|(_, step)| CgNext {
-                    step,
-                    new_plan: Some(summary),
-                }));
-            }
+        let began = Instant::now();
+        let grid = *space.grid();
+        let executor = Executor::new(self, &grid, state);
+        let found = self.plan_from(&mut space, state, goal, &executor)?;
+        tracing::debug!(
+            ms = began.elapsed().as_secs_f64() * 1e3,
+            steps = found.feet.steps.len(),
+            checked = executor.checked.get(),
+            refused = executor.refused.get(),
+            "CG-space planned the walk"
+        );
+        if found.feet.steps.is_empty() {
+            return Ok(None);
         }
-        Err(format!(
-            "{PLAN_ATTEMPTS} CG-space plans from here begin with a move that cannot be carried out; the last: {last_problem}"
-        ))
+        let steps = executor.steps_of(&found)?;
+        let summary = self.summary(&space, &found, executor.refused.get());
+        *queue = steps.into();
+        Ok(queue.pop_front().map(|(_, step)| CgNext {
+            step,
+            new_plan: Some(summary),
+        }))
     }
 
     /// The CG cell's side, metres.
@@ -195,20 +188,27 @@ impl CgSteps {
         space: &mut CgSpace,
         state: &GaitState,
         goal: Point2<f64>,
+        executor: &Executor<'_>,
     ) -> Result<Plan, String> {
         let t = state.body.translation;
         let yaw = state.body.rotation.euler_angles().2;
+        if space.grid().theta_bins == 1 && yaw.abs() > 0.05 {
+            return Err(format!(
+                "with one heading bin the CG-space plans for a robot facing +X (yaw 0), and this one faces {yaw:.2} rad; start it facing +X or plan with more heading bins"
+            ));
+        }
         let feet: Vec<Option<Point2<f64>>> = state
             .legs
             .iter()
             .map(|l| l.stance.then(|| Point2::new(l.foot.x, l.foot.y)))
             .collect();
-        plan(
+        plan_checked(
             space,
             (Point2::new(t.x, t.y), yaw),
             (goal, yaw),
             Some(&feet),
             &self.params,
+            Some(executor),
         )
         .map_err(|e| match e {
             CgError::Unreachable { .. } => format!("the goal cannot be reached: {e}"),
@@ -216,75 +216,12 @@ impl CgSteps {
         })
     }
 
-    /// The plan's moves as steps from `state`, up to the first that cannot be carried out
-    /// (why, and what to mark for it).
-    fn steps_of(
-        &self,
-        space: &CgSpace,
-        found: &Plan,
-        state: &GaitState,
-    ) -> (Vec<(GaitState, StepPlan)>, Option<(String, Unusable)>) {
-        let grid = *space.grid();
-        let mut at = state.clone();
-        let mut steps = Vec::new();
-        let mut pending: Option<(GaitState, StepPlan)> = None;
-        let route = &found.feet.route;
-        let mut k = 0;
-        for fs in &found.feet.steps {
-            let next_cell = route[(k + 1).min(route.len() - 1)];
-            let planned = match *fs {
-                FootStep::Place { leg, to, .. } => self
-                    .gait
-                    .swing_to(&at, &self.view, leg, grid.centre(to.0, to.1))
-                    .map_err(|e| (e, Unusable::Foot(to))),
-                FootStep::Lift { leg, .. } => self
-                    .gait
-                    .lift_leg(&at, &self.view, leg, self.lift_m)
-                    .map_err(|e| (e, Unusable::Cg(next_cell))),
-                FootStep::Advance { to, body_z } => self
-                    .advance(&at, &grid, to, body_z)
-                    .map_err(|e| (e, Unusable::Cg(to))),
-            };
-            let move_plan = match planned {
-                Ok(p) => p,
-                Err(problem) => {
-                    // A step whose advance is missing is not kept: the next plan starts
-                    // where its foot moves left the robot anyway.
-                    if let Some(p) = pending.take() {
-                        steps.push(p);
-                    }
-                    return (steps, Some(problem));
-                }
-            };
-            let end = move_plan.end.clone();
-            match &mut pending {
-                Some((_, step)) => {
-                    step.actions.extend(move_plan.actions);
-                    step.min_margin_m = step.min_margin_m.min(move_plan.min_margin_m);
-                    step.end = end.clone();
-                }
-                None => pending = Some((at.clone(), move_plan)),
-            }
-            if matches!(fs, FootStep::Advance { .. }) {
-                k += 1;
-                if let Some(p) = pending.take() {
-                    steps.push(p);
-                }
-            }
-            at = end;
-        }
-        if let Some(p) = pending.take() {
-            steps.push(p);
-        }
-        (steps, None)
-    }
-
     /// The body's move to a CG cell at the planner's height, or the nearest height to it at
     /// which the move can be carried out.
     fn advance(
         &self,
         at: &GaitState,
-        grid: &tca_cg_space::CgGrid,
+        grid: &CgGrid,
         to: CgCell,
         body_z: f64,
     ) -> Result<StepPlan, String> {
@@ -309,7 +246,7 @@ impl CgSteps {
         ))
     }
 
-    fn summary(&self, space: &CgSpace, found: &Plan, marked_by_execution: usize) -> CgPlanned {
+    fn summary(&self, space: &CgSpace, found: &Plan, refused_moves: usize) -> CgPlanned {
         let grid = space.grid();
         let route: Vec<[f64; 3]> = found
             .feet
@@ -342,7 +279,7 @@ impl CgSteps {
             nodes: found.feet.nodes,
             routes: found.routes,
             length_m,
-            marked_by_execution,
+            refused_moves,
         }
     }
 }
@@ -357,4 +294,134 @@ fn same_place(a: &GaitState, b: &GaitState, cell_m: f64) -> bool {
             .iter()
             .zip(&b.legs)
             .all(|(x, y)| x.stance == y.stance && (x.foot - y.foot).norm() <= FOOT_MATCH * cell_m)
+}
+
+/// The foot-level search's move check: each move the search considers is carried out on
+/// the robot's planned state with the free gait's checked single moves; the states and
+/// moves that pass are kept, by route cell and stance, to become the walk's steps.
+struct Executor<'a> {
+    steps: &'a CgSteps,
+    grid: CgGrid,
+    /// Per (route cell, stance): the robot's state there and the move that led to it.
+    states: RefCell<HashMap<(CgCell, Stance), (GaitState, Option<StepPlan>)>>,
+    checked: Cell<usize>,
+    refused: Cell<usize>,
+}
+
+impl<'a> Executor<'a> {
+    /// An executor whose plan starts from `state`.
+    fn new(steps: &'a CgSteps, grid: &CgGrid, state: &GaitState) -> Self {
+        let t = state.body.translation;
+        let yaw = state.body.rotation.euler_angles().2;
+        let mut states = HashMap::new();
+        if let Some(cell) = grid.cell_of(Point2::new(t.x, t.y), yaw) {
+            let start = Stance {
+                k: 0,
+                feet: state
+                    .legs
+                    .iter()
+                    .map(|l| {
+                        l.stance
+                            .then(|| grid.xy_of(Point2::new(l.foot.x, l.foot.y)))
+                    })
+                    .collect(),
+            };
+            states.insert((cell, start), (state.clone(), None));
+        }
+        Executor {
+            steps,
+            grid: *grid,
+            states: RefCell::new(states),
+            checked: Cell::new(0),
+            refused: Cell::new(0),
+        }
+    }
+
+    /// The plan's moves as steps, each the moves before an advance and the advance.
+    fn steps_of(&self, found: &Plan) -> Result<Vec<(GaitState, StepPlan)>, String> {
+        let states = self.states.borrow();
+        let route = &found.feet.route;
+        let mut stance = found.feet.start.clone();
+        let Some((mut at, _)) = states.get(&(route[0], stance.clone())).cloned() else {
+            return Err("the plan does not start where the robot stands".to_owned());
+        };
+        let mut steps = Vec::new();
+        let mut pending: Option<(GaitState, StepPlan)> = None;
+        for fs in &found.feet.steps {
+            apply_step(&mut stance, fs);
+            let Some((end, Some(move_plan))) = states.get(&(route[stance.k], stance.clone()))
+            else {
+                return Err(format!("the plan's move {fs:?} was not checked"));
+            };
+            match &mut pending {
+                Some((_, step)) => {
+                    step.actions.extend(move_plan.actions.iter().cloned());
+                    step.min_margin_m = step.min_margin_m.min(move_plan.min_margin_m);
+                    step.end = end.clone();
+                }
+                None => pending = Some((at.clone(), move_plan.clone())),
+            }
+            if matches!(fs, FootStep::Advance { .. })
+                && let Some(p) = pending.take()
+            {
+                steps.push(p);
+            }
+            at = end.clone();
+        }
+        if let Some(p) = pending.take() {
+            steps.push(p);
+        }
+        Ok(steps)
+    }
+}
+
+impl MoveCheck for Executor<'_> {
+    fn check(
+        &self,
+        from: &Stance,
+        from_cell: CgCell,
+        step: &FootStep,
+        to: &Stance,
+        to_cell: CgCell,
+    ) -> bool {
+        let Some((state, _)) = self
+            .states
+            .borrow()
+            .get(&(from_cell, from.clone()))
+            .cloned()
+        else {
+            return false;
+        };
+        self.checked.set(self.checked.get() + 1);
+        if self.checked.get() % 200 == 0 {
+            tracing::debug!(
+                checked = self.checked.get(),
+                refused = self.refused.get(),
+                k = from.k,
+                "checking moves"
+            );
+        }
+        let s = self.steps;
+        let planned = match *step {
+            FootStep::Place { leg, to, .. } => {
+                s.gait
+                    .swing_to(&state, &s.view, leg, self.grid.centre(to.0, to.1))
+            }
+            FootStep::Lift { leg, .. } => s.gait.lift_leg(&state, &s.view, leg, s.lift_m),
+            FootStep::Advance { to, body_z } => s.advance(&state, &self.grid, to, body_z),
+        };
+        match planned {
+            Ok(p) => {
+                self.states
+                    .borrow_mut()
+                    .insert((to_cell, to.clone()), (p.end.clone(), Some(p)));
+                true
+            }
+            Err(why) => {
+                tracing::trace!(?step, %why, "a move the robot cannot carry out");
+                self.refused.set(self.refused.get() + 1);
+                false
+            }
+        }
+    }
 }

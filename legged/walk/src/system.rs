@@ -166,7 +166,7 @@ pub async fn connect_module(
                 params.route.seed = setup.seed;
                 config.planner = crate::gait_module::StepPlanner::CgSpace {
                     terrain: setup.terrain.clone(),
-                    cg: tca_cg_space::CgParams::default(),
+                    cg: crate::cg_steps::walking_cg_params(),
                     params,
                 };
             }

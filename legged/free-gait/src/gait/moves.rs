@@ -64,6 +64,14 @@ impl FreeGait {
                     info.name, centre.x, centre.y, centre.z
                 )
             })?;
+        let mut at_foothold = posture.clone();
+        at_foothold[leg] = joints.clone();
+        if let Some(contact) = self.legs_touch(&at_foothold, Some(leg)) {
+            return Err(format!(
+                "with its foot at ({:.2}, {:.2}), leg `{}`: {contact}",
+                at.x, at.y, info.name
+            ));
+        }
         let foothold = Foothold {
             centre,
             joints,
