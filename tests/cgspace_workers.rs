@@ -146,3 +146,99 @@ async fn worker_processes_over_zenoh_answer_the_joins() {
     let stats = joiner.shutdown().await;
     assert_eq!(stats.replacements, 1, "{stats:?}");
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn tca_plan_cgspace_with_workers_plans_the_route_on_worker_processes() {
+    let (status, stdout, stderr) = run_tca(
+        "tca plan cgspace --workers 2",
+        &[
+            "plan",
+            "cgspace",
+            "--robot",
+            "ambler",
+            "--terrain",
+            "cliff",
+            "--workers",
+            "2",
+            "--json",
+        ],
+        Duration::from_secs(60),
+    )
+    .await;
+    assert!(status.success(), "{stdout}\n{stderr}");
+    let v: serde_json::Value = serde_json::from_str(stdout.trim()).expect("one JSON line");
+    assert_eq!(v["planned"], true, "{v}");
+    assert_eq!(v["workers"], 2);
+    assert_eq!(v["replacements"], 0);
+    let (space, s, g) = cliff();
+    let mut local_space = space.clone();
+    let local = plan_route_batched(
+        &mut local_space,
+        &mut LocalJoiner,
+        s,
+        g,
+        &RouteParams::default(),
+        &BatchParams::default(),
+    )
+    .expect("a local route");
+    assert_eq!(
+        v["route_cells"].as_u64(),
+        Some(local.cells.len() as u64),
+        "{v}"
+    );
+    let per_worker = v["joins_per_worker"].as_array().expect("joins per worker");
+    assert!(per_worker.iter().all(|j| j.as_u64() > Some(0)), "{v}");
+
+    // Refused with the reason: more workers than strips, a central that is not there.
+    let (status, _, stderr) = run_tca(
+        "too many workers",
+        &[
+            "plan",
+            "cgspace",
+            "--robot",
+            "ambler",
+            "--terrain",
+            "cliff",
+            "--workers",
+            "200",
+        ],
+        Duration::from_secs(30),
+    )
+    .await;
+    assert!(!status.success());
+    assert!(stderr.contains("--workers 200"), "{stderr}");
+    let (status, _, stderr) = run_tca(
+        "no central",
+        &[
+            "plan",
+            "cgspace",
+            "--robot",
+            "ambler",
+            "--terrain",
+            "cliff",
+            "--workers",
+            "2",
+            "--connect",
+            &format!("tcp/127.0.0.1:{}", free_port()),
+        ],
+        Duration::from_secs(30),
+    )
+    .await;
+    assert!(!status.success());
+    assert!(stderr.contains("cannot join central"), "{stderr}");
+    let (status, _, stderr) = run_tca(
+        "a worker without its index",
+        &[
+            "module",
+            "cgspace-worker",
+            "--robot",
+            "ambler",
+            "--terrain",
+            "cliff",
+        ],
+        Duration::from_secs(30),
+    )
+    .await;
+    assert!(!status.success());
+    assert!(stderr.contains("--index"), "{stderr}");
+}

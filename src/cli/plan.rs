@@ -42,6 +42,7 @@ pub(crate) enum PlanCommand {
   tca plan cgspace --robot spider --terrain flat --from 4,0 --to 12,0
   tca plan cgspace --robot ambler --terrain walled-goal        # no route: exit status 2
   tca plan cgspace --robot robot.urdf --terrain field.asc --from 2,2 --to 20,5,1.57 --seeds 1..5
+  tca plan cgspace --robot ambler --terrain cliff --workers 3      # the route's joins on 3 worker processes
 
 The picture (DIR/cgspace-SEED.png) shows the elevation in grey, foot cells without traction
 as red circles, invalid CG cells in black (--theta all: black where every heading is
@@ -82,6 +83,25 @@ pub(crate) struct CgSpaceArgs {
     /// Print each plan as one JSON line.
     #[arg(long)]
     json: bool,
+    /// Plan the route only, its roadmap's A* joins on N worker processes (`tca module
+    /// cgspace-worker`, started and stopped by this command), each owning a strip of
+    /// CG-space under a region cap.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=256), conflicts_with_all = ["seeds", "png"])]
+    workers: Option<u32>,
+    /// With --workers: the central the planner and the workers join (default: one started
+    /// in this process on a free loopback port).
+    #[arg(long, value_name = "ENDPOINT", requires = "workers")]
+    connect: Option<String>,
+    /// With --workers: most CG-space regions each worker holds (default: as many as its
+    /// strip's searches can touch).
+    #[arg(long, value_name = "N", requires = "workers")]
+    region_cap: Option<usize>,
+    /// With --workers and --connect: use the workers already connected to that central
+    /// (`tca module cgspace-worker --index K ...`, one per index, with this robot, terrain
+    /// and seed; on any machine) instead of starting them; one that dies must be started
+    /// again from outside within 30 s.
+    #[arg(long, requires = "connect")]
+    external_workers: bool,
 }
 
 #[derive(Debug, Args)]
@@ -122,7 +142,10 @@ pub(crate) struct RrtArgs {
 pub(crate) async fn run(command: PlanCommand) -> anyhow::Result<ExitCode> {
     match command {
         PlanCommand::Rrt(args) => run_rrt(args),
-        PlanCommand::Cgspace(args) => run_cgspace(args),
+        PlanCommand::Cgspace(args) => match args.workers {
+            Some(n) => run_cgspace_workers(args, n as usize).await,
+            None => run_cgspace(args),
+        },
     }
 }
 
@@ -503,6 +526,202 @@ fn run_cgspace(args: CgSpaceArgs) -> anyhow::Result<ExitCode> {
         }
     }
     Ok(if planned == total {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(2)
+    })
+}
+
+/// `tca plan cgspace --workers N`: the route alone, its joins on N worker processes of this
+/// same binary.
+async fn run_cgspace_workers(args: CgSpaceArgs, workers: usize) -> anyhow::Result<ExitCode> {
+    use tca_cg_space_bus::{DistributedJoiner, ExternalWorkers, JoinerOptions, ProcessWorkers};
+    let model = RobotModel::load(&args.robot)
+        .map_err(|e| anyhow::anyhow!("--robot {}: {e}", args.robot))?;
+    let seed = args.seed;
+    let (field, course) = terrain_of(&args.terrain, seed)?;
+    let place = |option: &str, text: &Option<String>| {
+        text.as_deref()
+            .map(|t| parse_place(option, t, true))
+            .transpose()
+    };
+    let start = match (place("from", &args.from)?, course) {
+        (Some(v), _) => [v[0], v[1], v.get(2).copied().unwrap_or(0.0)],
+        (None, Some((s, _))) => s,
+        (None, None) => anyhow::bail!("--from X,Y is needed with a terrain file"),
+    };
+    let goal = match (place("to", &args.to)?, course) {
+        (Some(v), _) => [v[0], v[1], v.get(2).copied().unwrap_or(start[2])],
+        (None, Some((_, g))) => [g[0], g[1], start[2]],
+        (None, None) => anyhow::bail!("--to X,Y is needed with a terrain file"),
+    };
+    let space = CgSpace::for_model(&model, &field, CgParams::default()).map_err(|e| {
+        anyhow::anyhow!("--robot {} on --terrain {}: {e}", args.robot, args.terrain)
+    })?;
+    let grid = *space.grid();
+    check_inside("from", "the start", &grid, Point2::new(start[0], start[1]))?;
+    check_inside("to", "the goal", &grid, Point2::new(goal[0], goal[1]))?;
+    let cell = |p: [f64; 3]| grid.cell_of(Point2::new(p[0], p[1]), p[2]);
+    let (Some(s), Some(g)) = (cell(start), cell(goal)) else {
+        anyhow::bail!("the start or the goal is outside the map");
+    };
+    let route_params = tca_cg_space::RouteParams {
+        seed,
+        ..tca_cg_space::RouteParams::default()
+    };
+    let partition = tca_cg_space::Partition::new(&grid, workers)
+        .map_err(|e| anyhow::anyhow!("--workers {workers}: {e}"))?;
+    let cap = args.region_cap.unwrap_or_else(|| {
+        (0..workers)
+            .map(|k| partition.regions_in_reach(k, &route_params))
+            .max()
+            .unwrap_or(1)
+    });
+    // Central: the one given, or one in this process the worker processes can reach.
+    let (central, endpoint, connector) = match &args.connect {
+        Some(e) => (None, e.clone(), tca_module::Connector::endpoint(e.clone())),
+        None => {
+            let e = tca_link::net::free_loopback_endpoint()
+                .context("no free loopback port for the workers' central")?;
+            let c = tca_central::start(tca_central::StartOptions {
+                listen: vec![e.clone()],
+                ..tca_central::StartOptions::default()
+            })
+            .await
+            .with_context(|| format!("cannot start central on {e}"))?;
+            let connector = tca_module::Connector::from(c.in_process());
+            (Some(c), e, connector)
+        }
+    };
+    let planner = tca_module::Module::builder(format!("cgspace-planner-{}", std::process::id()))
+        .connect(&connector)
+        .await
+        .with_context(|| format!("the planner cannot join central at {endpoint}"))?;
+    let exe = std::env::current_exe().context("cannot find this program to start the workers")?;
+    let worker_args: Vec<String> = [
+        "module",
+        "cgspace-worker",
+        "--connect",
+        &endpoint,
+        "--robot",
+        &args.robot,
+        "--terrain",
+        &args.terrain,
+        "--seed",
+        &seed.to_string(),
+        "--region-cap",
+        &cap.to_string(),
+    ]
+    .iter()
+    .map(|a| (*a).to_owned())
+    .collect();
+    let options = JoinerOptions::default();
+    let joiner = if args.external_workers {
+        DistributedJoiner::start(planner, workers, ExternalWorkers, options).await
+    } else {
+        let factory = ProcessWorkers::new(exe, worker_args);
+        DistributedJoiner::start(planner, workers, factory, options).await
+    };
+    let mut joiner = joiner.map_err(|e| anyhow::anyhow!("--workers {workers}: {e}"))?;
+    let began = Instant::now();
+    let (result, joiner, space) = tokio::task::spawn_blocking(move || {
+        let mut space = space;
+        let r = tca_cg_space::plan_route_batched(
+            &mut space,
+            &mut joiner,
+            s,
+            g,
+            &route_params,
+            &tca_cg_space::BatchParams::default(),
+        );
+        (r, joiner, space)
+    })
+    .await
+    .context("the planning thread stopped")?;
+    let time_s = began.elapsed().as_secs_f64();
+    let stats = joiner.shutdown().await;
+    if let Some(c) = central {
+        let _ = c.shutdown().await;
+    }
+    // The caps the workers report (external workers have their own).
+    let mut caps: Vec<u64> = stats.workers.iter().map(|w| w.region_cap).collect();
+    caps.dedup();
+    let caps = caps
+        .iter()
+        .map(|c| {
+            if *c == 0 {
+                "none".to_owned()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("/");
+    let per_worker = stats
+        .queries_per_worker
+        .iter()
+        .map(u64::to_string)
+        .collect::<Vec<_>>()
+        .join("/");
+    let planned = match &result {
+        Ok(route) => {
+            let length = route_length_m(&grid, &route.cells);
+            if args.json {
+                let cells: Vec<[f64; 3]> = route
+                    .cells
+                    .iter()
+                    .map(|c| {
+                        let p = grid.centre(c.ix, c.iy);
+                        [p.x, p.y, grid.theta(c.it)]
+                    })
+                    .collect();
+                println!(
+                    "{}",
+                    json!({
+                        "seed": seed, "planned": true, "workers": workers, "region_cap": caps,
+                        "route_cells": route.cells.len(), "route_length_m": length,
+                        "draws": route.draws, "joins": route.searches, "batches": stats.batches,
+                        "joins_per_worker": stats.queries_per_worker,
+                        "replacements": stats.replacements,
+                        "worker_cells_evaluated": stats.cells_evaluated(),
+                        "worker_regions_materialised": stats.regions_materialised(),
+                        "planner_cells_evaluated": space.evaluations(),
+                        "time_s": time_s, "route": cells,
+                    })
+                );
+            } else {
+                println!(
+                    "seed {seed}: route of {} cells, {length:.2} m; {} draws, {} joins in {} batches on {workers} workers ({per_worker}), {} workers replaced; the workers evaluated {} CG cells in {} regions (cap {caps} each), the planner {}; planned in {time_s:.3} s (footfalls: without --workers)",
+                    route.cells.len(),
+                    route.draws,
+                    route.searches,
+                    stats.batches,
+                    stats.replacements,
+                    stats.cells_evaluated(),
+                    stats.regions_materialised(),
+                    space.evaluations(),
+                );
+            }
+            true
+        }
+        Err(e) => {
+            if args.json {
+                println!(
+                    "{}",
+                    json!({ "seed": seed, "planned": false, "workers": workers, "reason": e.to_string(), "replacements": stats.replacements, "time_s": time_s })
+                );
+            } else {
+                let what = if e.to_string().starts_with("no route") {
+                    ""
+                } else {
+                    "no route planned: "
+                };
+                println!("seed {seed}: {what}{e}");
+            }
+            false
+        }
+    };
+    Ok(if planned {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(2)

@@ -220,6 +220,31 @@ impl WorkerFactory for ProcessWorkers {
     }
 }
 
+/// Workers started elsewhere (by hand on other machines, or by a supervisor that restarts
+/// them): starting one only waits for it to register, and a replacement is the same worker
+/// started again from outside within the joiner's `start_timeout`. Stopping does nothing.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ExternalWorkers;
+
+struct ExternalHandle;
+
+impl WorkerHandle for ExternalHandle {
+    fn stop(self: Box<Self>) -> BoxFuture<'static, ()> {
+        Box::pin(async {})
+    }
+}
+
+impl WorkerFactory for ExternalWorkers {
+    fn start(&self, index: usize) -> BoxFuture<'_, Result<Box<dyn WorkerHandle>, JoinError>> {
+        tracing::info!(
+            worker = index,
+            "waiting for {} to join central",
+            worker_name(index)
+        );
+        Box::pin(async { Ok(Box::new(ExternalHandle) as Box<dyn WorkerHandle>) })
+    }
+}
+
 /// How the joiner waits and how often it replaces.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JoinerOptions {

@@ -10,7 +10,8 @@
 //! - [`worker`]: the worker module `cgspace-worker-K`.
 //! - [`client`]: [`DistributedJoiner`], the [`Joiner`] the planner hands to
 //!   [`plan_route_batched`]; it replaces dead workers through a [`WorkerFactory`]
-//!   ([`InProcessWorkers`] or [`ProcessWorkers`]).
+//!   ([`InProcessWorkers`], [`ProcessWorkers`], or [`ExternalWorkers`] for workers started
+//!   elsewhere).
 //!
 //! ```no_run
 //! # async fn run(connector: tca_module::Connector, mut space: tca_cg_space::CgSpace,
@@ -43,8 +44,8 @@ pub mod setup;
 pub mod worker;
 
 pub use client::{
-    DistributedJoiner, InProcessWorkers, JoinStats, JoinerOptions, ProcessWorkers, WorkerFactory,
-    WorkerHandle,
+    DistributedJoiner, ExternalWorkers, InProcessWorkers, JoinStats, JoinerOptions, ProcessWorkers,
+    WorkerFactory, WorkerHandle,
 };
 pub use messages::{
     JOIN_STEM, JoinBatch, JoinReply, WORKER_STEM, WorkerCounters, join_name, join_registration,
