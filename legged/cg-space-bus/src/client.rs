@@ -9,7 +9,9 @@ use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Duration;
 
 use futures::future::{BoxFuture, join_all};
-use tca_cg_space::{CgSpace, JoinError, JoinQuery, Joiner, Joins, Partition, fingerprint};
+use tca_cg_space::{
+    CgGrid, CgRobot, CgSpace, FootMap, JoinError, JoinQuery, Joiner, Joins, Partition, fingerprint,
+};
 use tca_messages::{decode_data, encode_data};
 use tca_module::{Connector, Module, ModuleError};
 use tokio::io::AsyncBufReadExt;
@@ -326,6 +328,9 @@ struct Shared {
 pub struct DistributedJoiner {
     shared: Arc<Shared>,
     runtime: Handle,
+    /// The last space's fingerprint, kept while its robot tables, grid and foot map are the
+    /// same ones (holding the foot map makes any change to it a copy: a new pointer).
+    print: Option<(Arc<CgRobot>, Arc<FootMap>, CgGrid, u64)>,
 }
 
 impl DistributedJoiner {
@@ -371,6 +376,7 @@ impl DistributedJoiner {
         Ok(DistributedJoiner {
             shared,
             runtime: Handle::current(),
+            print: None,
         })
     }
 
@@ -422,6 +428,25 @@ impl DistributedJoiner {
         Ok(out)
     }
 
+    /// The space's fingerprint, computed again only when its tables, grid or foot map changed.
+    fn fingerprint_of(&mut self, space: &CgSpace) -> u64 {
+        if let Some((robot, foot, grid, print)) = &self.print
+            && Arc::ptr_eq(robot, space.robot())
+            && Arc::ptr_eq(foot, &space.foot_shared())
+            && grid == space.grid()
+        {
+            return *print;
+        }
+        let print = fingerprint(space);
+        self.print = Some((
+            space.robot().clone(),
+            space.foot_shared(),
+            *space.grid(),
+            print,
+        ));
+        print
+    }
+
     /// Runs a future to its end from synchronous code.
     fn block_on<T>(&self, f: impl std::future::Future<Output = T>) -> Result<T, JoinError> {
         match Handle::try_current() {
@@ -444,7 +469,7 @@ impl Joiner for DistributedJoiner {
         let workers = self.shared.workers;
         let partition =
             Partition::new(space.grid(), workers).map_err(|e| JoinError::new(e.to_string()))?;
-        let print = fingerprint(space);
+        let print = self.fingerprint_of(space);
         let mut marked: Vec<_> = space.marked().iter().copied().collect();
         marked.sort_unstable();
         let mut shares: Vec<(Vec<JoinQuery>, Vec<usize>)> = vec![(Vec::new(), Vec::new()); workers];

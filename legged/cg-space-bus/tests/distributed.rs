@@ -364,3 +364,28 @@ fn a_worker_checks_what_it_is_asked() {
         .unwrap();
     assert_eq!(r.routes[0].as_ref().map(Vec::len), Some(3));
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_foot_cell_forbidden_after_the_start_is_noticed() {
+    let (mut space, s, g) = cliff(1);
+    let (_central, connector) = central().await;
+    let planner = Module::builder("cgspace-planner")
+        .connect(&connector)
+        .await
+        .expect("the planner connects");
+    let workers = InProcessWorkers::new(connector.clone(), &space, None);
+    let mut joiner = DistributedJoiner::start(planner, 2, workers, JoinerOptions::default())
+        .await
+        .expect("two workers");
+    let near = CgCell::new(s.ix + 3, s.iy, s.it);
+    let q = [JoinQuery::new(s, near, 3)];
+    let answers = tokio::task::block_in_place(|| joiner.join(&mut space, &q)).expect("joined");
+    assert_eq!(answers[0].as_ref().map(Vec::len), Some(4));
+    // The planner's foot map changes: the workers' spaces are no longer its own.
+    let (fx, fy) = (g.ix, g.iy);
+    assert!(space.foot().valid(fx, fy));
+    space.forbid_foot(fx, fy);
+    let e = tokio::task::block_in_place(|| joiner.join(&mut space, &q)).expect_err("refused");
+    assert!(e.to_string().contains("fingerprint"), "{e}");
+    joiner.shutdown().await;
+}

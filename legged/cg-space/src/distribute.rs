@@ -490,12 +490,13 @@ impl Partition {
     }
 }
 
-/// A 64-bit digest (FNV-1a) of what a space's answers depend on: the robot's tables (legs'
-/// range cells, under-carriage, foot radii, parameters), the grid and the foot map. Two
-/// spaces with the same fingerprint answer every query alike; a worker compares the
-/// planner's fingerprint with its own before it answers.
+/// A 64-bit digest of what a space's answers depend on: the robot's tables (legs' range
+/// cells, under-carriage, foot radii, parameters), the grid and the foot map. Two spaces
+/// with the same fingerprint answer every query alike; a worker compares the planner's
+/// fingerprint with its own before it answers. (A consistency check, not a cryptographic
+/// hash: each word is mixed as in SplitMix64 and folded in FNV-1a fashion.)
 pub fn fingerprint(space: &CgSpace) -> u64 {
-    let mut h = Fnv::new();
+    let mut h = Digest::new();
     let robot = space.robot();
     h.bytes(robot.name.as_bytes());
     h.u64(robot.leg_count() as u64);
@@ -543,27 +544,33 @@ pub fn fingerprint(space: &CgSpace) -> u64 {
     h.finish()
 }
 
-/// FNV-1a, 64 bits.
-struct Fnv(u64);
+/// The digest's state: words mixed (SplitMix64's finaliser) and folded in (FNV-1a's step).
+struct Digest(u64);
 
-impl Fnv {
+impl Digest {
     fn new() -> Self {
-        Fnv(0xcbf2_9ce4_8422_2325)
+        Digest(0xcbf2_9ce4_8422_2325)
     }
 
     fn bytes(&mut self, b: &[u8]) {
-        for &x in b {
-            self.0 ^= u64::from(x);
-            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        self.u64(b.len() as u64);
+        for chunk in b.chunks(8) {
+            let mut word = [0u8; 8];
+            word[..chunk.len()].copy_from_slice(chunk);
+            self.u64(u64::from_le_bytes(word));
         }
     }
 
     fn u64(&mut self, v: u64) {
-        self.bytes(&v.to_le_bytes());
+        let mut z = v.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        self.0 = (self.0 ^ z).wrapping_mul(0x0000_0100_0000_01b3);
     }
 
     fn i64(&mut self, v: i64) {
-        self.bytes(&v.to_le_bytes());
+        self.u64(v as u64);
     }
 
     fn f64(&mut self, v: f64) {
