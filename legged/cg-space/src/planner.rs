@@ -22,6 +22,10 @@ pub struct PlanParams {
     pub search: SearchParams,
     /// Routes replanned after the search failed before the planner gives up.
     pub max_replans: usize,
+    /// Cells around a cell the search cannot get past that are marked with it (same
+    /// heading, within this many cells in x and y): 0 marks the cell alone, as the paper's
+    /// feedback would; more moves the next route further from where the search stuck.
+    pub mark_radius: i32,
 }
 
 impl Default for PlanParams {
@@ -30,6 +34,7 @@ impl Default for PlanParams {
             route: RouteParams::default(),
             search: SearchParams::default(),
             max_replans: 30,
+            mark_radius: 0,
         }
     }
 }
@@ -162,7 +167,18 @@ pub fn plan_checked(
                     furthest = fail.furthest,
                     "foot search stuck; cell marked invalid"
                 );
-                space.mark_invalid(bad);
+                let r = params.mark_radius.max(0);
+                for dy in -r..=r {
+                    for dx in -r..=r {
+                        let c = CgCell::new(bad.ix + dx, bad.iy + dy, bad.it);
+                        // The cells the route has already passed stay usable.
+                        if c == bad
+                            || (space.grid().contains(c) && !route[..=fail.furthest].contains(&c))
+                        {
+                            space.mark_invalid(c);
+                        }
+                    }
+                }
                 marked.push(bad);
                 // Keep the steps up to the stance that reached the furthest cell, and plan
                 // the rest of the route from there.

@@ -2,7 +2,7 @@
 //!
 //! `cliff`: a plateau 2.5 m high across the whole way from x = 14 m, taller than the
 //! Ambler's legs can step (1.2 m of vertical travel either way), with a ramp 10 m wide up to
-//! it on the north side (y 2..12 m, rising from x = 6 m to 14 m at 17°: wide enough for the
+//! it on the north side (y 2.5..12.5 m, rising from x = 6 m to 14 m at 17°: wide enough for the
 //! Ambler, 7.7 m across its middle feet, to walk up it facing the plateau); start (4, 0),
 //! goal (24, 0) on the plateau. `walled-goal`: the goal (20, 0) in a yard ringed by a cliff 1 m
 //! thick and 5 m high, 5 m from it; start (5, 0). Both carry gentle seeded relief of up to
@@ -29,7 +29,7 @@ pub(crate) const PLATEAU_M: f64 = 2.5;
 pub(crate) const CLIFF_X_M: f64 = 14.0;
 /// The ramp: where it rises along X, and its sides along Y, metres.
 pub(crate) const RAMP_X_M: (f64, f64) = (6.0, 14.0);
-pub(crate) const RAMP_Y_M: (f64, f64) = (2.0, 12.0);
+pub(crate) const RAMP_Y_M: (f64, f64) = (2.5, 12.5);
 
 /// The cliff course's start and goal.
 pub(crate) const CLIFF_START: CourseStart = CourseStart {

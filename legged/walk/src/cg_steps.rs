@@ -117,6 +117,13 @@ impl CgSteps {
         // more footholds per reason give the search others to try.
         let mut params = params;
         params.search.candidates = params.search.candidates.max(8);
+        // Refusals count against the stall budget: a smaller budget hands a cell the robot
+        // cannot get past back to the route planner sooner.
+        params.search.stall_nodes = params.search.stall_nodes.min(1_000);
+        // Where the robot cannot get past a cell, its neighbours are usually no better (the
+        // edge of a ramp): the next route keeps two cells further off.
+        params.mark_radius = params.mark_radius.max(2);
+        params.max_replans = params.max_replans.max(60);
         let lift_m = 3.0 * gait.clearance_m;
         let stand_m = model.neutral_height();
         Ok(CgSteps {
