@@ -303,6 +303,9 @@ fn same_place(a: &GaitState, b: &GaitState, cell_m: f64) -> bool {
             .all(|(x, y)| x.stance == y.stance && (x.foot - y.foot).norm() <= FOOT_MATCH * cell_m)
 }
 
+/// The robot's state at a route cell and stance, and the move that led to it.
+type Reached = (GaitState, Option<StepPlan>);
+
 /// The foot-level search's move check: each move the search considers is carried out on
 /// the robot's planned state with the free gait's checked single moves; the states and
 /// moves that pass are kept, by route cell and stance, to become the walk's steps.
@@ -310,7 +313,7 @@ struct Executor<'a> {
     steps: &'a CgSteps,
     grid: CgGrid,
     /// Per (route cell, stance): the robot's state there and the move that led to it.
-    states: RefCell<HashMap<(CgCell, Stance), (GaitState, Option<StepPlan>)>>,
+    states: RefCell<HashMap<(CgCell, Stance), Reached>>,
     checked: Cell<usize>,
     refused: Cell<usize>,
 }
@@ -400,7 +403,7 @@ impl MoveCheck for Executor<'_> {
             return false;
         };
         self.checked.set(self.checked.get() + 1);
-        if self.checked.get() % 200 == 0 {
+        if self.checked.get().is_multiple_of(200) {
             tracing::debug!(
                 checked = self.checked.get(),
                 refused = self.refused.get(),
