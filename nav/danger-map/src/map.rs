@@ -115,7 +115,7 @@ impl DangerMap {
 
     /// Recomputes the cells of `patch` plus a border of the robot's radius. Cells that were
     /// untraversable read their heights from `older`, the others from `recent`. Returns
-    /// the cells whose danger changed.
+    /// the cells whose danger or certainty changed.
     pub fn update(
         &mut self,
         patch: CellRect,
@@ -174,7 +174,7 @@ impl DangerMap {
                         iys,
                     ),
                 };
-                if after.danger != before.danger {
+                if after.danger != before.danger || after.certainty != before.certainty {
                     changed.push(c);
                 }
                 if let Some(slot) = self.cells.get_mut(c) {

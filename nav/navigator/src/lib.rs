@@ -21,6 +21,7 @@
 mod base;
 mod courses;
 mod navigator;
+mod perceived;
 mod picture;
 mod presets;
 mod run;
@@ -29,6 +30,7 @@ mod wheeled;
 pub use base::{Base, Motion};
 pub use courses::{Course, course_by_name, hill_course, ramps_course};
 pub use navigator::{Command, NavError, NavParams, Navigator};
+pub use perceived::{CellChange, PerceivedMap};
 pub use picture::write_picture;
 pub use presets::{WHEELED_MOUNT, wheeled_params};
 pub use run::{RunOptions, RunReport, run, true_danger_map, true_map_path_m};

@@ -1,11 +1,13 @@
 //! The navigation loop's decisions, from the estimated pose and the depth image alone.
 
 use nalgebra::Point2;
-use tca_nav_danger_map::{DangerError, DangerMap, DangerParams};
+use tca_nav_danger_map::{CellDanger, DangerError, DangerMap, DangerParams};
 use tca_nav_dstar_lite::{Cell, CostGrid, DStarLite, PlanError};
-use tca_nav_sensing::{CameraMount, CameraParams, DepthImage, Pose2, wrap};
-use tca_nav_terrain_map::{Ageing, TerrainMap, TerrainMapError};
-use tca_robot::CellIndex;
+use tca_nav_sensing::{CameraMount, CameraParams, Pose2, wrap};
+use tca_nav_terrain_map::{Ageing, TerrainMapError};
+use tca_robot::{CellIndex, Grid};
+
+use crate::CellChange;
 
 /// Why navigation could not start or go on.
 #[derive(Debug, thiserror::Error)]
@@ -22,6 +24,16 @@ pub enum NavError {
     /// The planner refused.
     #[error(transparent)]
     Plan(#[from] PlanError),
+    /// A changed cell lies outside the navigator's map (the map side's grid differs).
+    #[error(
+        "a danger change names cell ({ix}, {iy}), outside the navigator's map; the map side and the navigator must use the same grid"
+    )]
+    ChangeOffMap {
+        /// Column.
+        ix: usize,
+        /// Row.
+        iy: usize,
+    },
     /// The start or goal lies outside the map.
     #[error("the {what} ({x:.3}, {y:.3}) m lies outside the map; give one on the terrain")]
     OffMap {
@@ -114,12 +126,13 @@ struct Exploration {
     targets: Vec<f64>,
 }
 
-/// The navigator: terrain map, danger map, D* Lite and motion control.
+/// The navigator: D* Lite over the danger map as the map side reports it, and motion
+/// control. It keeps its own copy of every cell's danger and certainty, updated from the
+/// changes it is given.
 #[derive(Debug, Clone)]
 pub struct Navigator {
     params: NavParams,
-    terrain: TerrainMap,
-    danger: DangerMap,
+    cells: Grid<CellDanger>,
     planner: DStarLite,
     goal: Point2<f64>,
     path: Vec<Cell>,
@@ -146,12 +159,12 @@ impl Navigator {
         start: Pose2,
         goal: Point2<f64>,
     ) -> Result<Self, NavError> {
-        let terrain = TerrainMap::new(origin, resolution_m, nx, ny, params.ageing)?;
-        let danger = DangerMap::new(params.danger.clone(), origin, resolution_m, nx, ny)?;
+        let cells = DangerMap::new(params.danger.clone(), origin, resolution_m, nx, ny)?
+            .cells()
+            .clone();
         let grid = CostGrid::filled(nx, ny, params.beta, 1.0)?;
         let cell_of = |what, x: f64, y: f64| {
-            danger
-                .cells()
+            cells
                 .cell_at(Point2::new(x, y))
                 .map(|c| Cell::new(c.ix, c.iy))
                 .ok_or(NavError::OffMap { what, x, y })
@@ -162,8 +175,7 @@ impl Navigator {
         let path = planner.plan()?.cells;
         Ok(Self {
             params,
-            terrain,
-            danger,
+            cells,
             planner,
             goal,
             path,
@@ -182,16 +194,21 @@ impl Navigator {
         &self.params
     }
 
-    /// The danger map as perceived.
-    pub fn danger(&self) -> &DangerMap {
-        &self.danger
+    /// The danger map as the navigator knows it.
+    pub fn danger(&self) -> &Grid<CellDanger> {
+        &self.cells
+    }
+
+    /// The goal, world frame.
+    pub fn goal(&self) -> Point2<f64> {
+        self.goal
     }
 
     /// The planned path, world frame.
     pub fn path(&self) -> Vec<Point2<f64>> {
         self.path
             .iter()
-            .map(|c| self.danger.cells().cell_center(CellIndex::new(c.ix, c.iy)))
+            .map(|c| self.cells.cell_center(CellIndex::new(c.ix, c.iy)))
             .collect()
     }
 
@@ -210,44 +227,39 @@ impl Navigator {
         self.planner.total_expansions()
     }
 
-    /// One frame: the estimated pose `estimate`, the ground height under it `ground_m`
-    /// (from the 6-DoF odometry; drift is modelled in the plane only) and this frame's
-    /// depth image. Returns what to do, or [`PlanError::NoPath`] when the goal is cut off.
-    pub fn step(
-        &mut self,
-        estimate: Pose2,
-        ground_m: f64,
-        image: &DepthImage,
-    ) -> Result<Command, NavError> {
+    /// One frame: the estimated pose `estimate` and the cells whose danger or certainty
+    /// this frame's depth image changed (from [`crate::PerceivedMap::insert`], in this process or in the
+    /// LTM Manager). Returns what to do, or [`PlanError::NoPath`] when the goal is cut off.
+    pub fn step(&mut self, estimate: Pose2, changes: &[CellChange]) -> Result<Command, NavError> {
         if let Some(last) = self.last_pose {
             self.travelled_since_turn_m += last.distance(&estimate);
         }
         self.last_pose = Some(estimate);
         let here = Point2::new(estimate.x, estimate.y);
-        let to_goal = self.goal - here;
-        if to_goal.norm() <= self.params.goal_tolerance_m {
-            return Ok(Command::Reached);
-        }
-        // Map and danger update.
-        let cam = self.params.mount.camera_pose(&estimate, ground_m);
-        let points = image.points(&self.params.camera, &cam, self.params.map_range_m);
         let mut affected = false;
-        if let Some(rect) = self.terrain.insert_frame(points) {
-            let changed = self
-                .danger
-                .update(rect, &self.terrain.recent(), &self.terrain.older());
+        if !changes.is_empty() {
             let near_path = self.path_neighbourhood();
-            for c in changed {
-                let d = self.danger.cell(c).danger;
+            for change in changes {
+                let c = change.cell;
+                let Some(slot) = self.cells.get_mut(c) else {
+                    return Err(NavError::ChangeOffMap { ix: c.ix, iy: c.iy });
+                };
+                let danger_changed = slot.danger != change.danger.danger;
+                *slot = change.danger;
+                if !danger_changed {
+                    continue;
+                }
                 let cell = Cell::new(c.ix, c.iy);
-                self.planner.set_danger(cell, d)?;
+                self.planner.set_danger(cell, change.danger.danger)?;
                 if near_path.contains(&cell) {
                     affected = true;
                 }
             }
         }
-        let cells = self.danger.cells();
-        let me = cells.nearest_cell(here);
+        if (self.goal - here).norm() <= self.params.goal_tolerance_m {
+            return Ok(Command::Reached);
+        }
+        let me = self.cells.nearest_cell(here);
         self.planner.move_start(Cell::new(me.ix, me.iy))?;
         let path = self.planner.plan()?.cells;
         if affected && !self.path.ends_with(&path) {
@@ -274,7 +286,7 @@ impl Navigator {
     }
 
     fn cell_point(&self, c: Cell) -> Point2<f64> {
-        self.danger.cells().cell_center(CellIndex::new(c.ix, c.iy))
+        self.cells.cell_center(CellIndex::new(c.ix, c.iy))
     }
 
     fn motion(&mut self, est: Pose2) -> Command {
@@ -329,7 +341,10 @@ impl Navigator {
             if d > self.params.map_range_m {
                 return None;
             }
-            let known = self.danger.cell(CellIndex::new(c.ix, c.iy)).certainty;
+            let known = self
+                .cells
+                .get(CellIndex::new(c.ix, c.iy))
+                .map_or(0.0, |d| d.certainty);
             (d >= 0.3 && known < 1.0).then_some(p)
         })?;
         let Some((prev, _)) = self.last_explored else {

@@ -3,19 +3,19 @@
 use std::path::Path;
 
 use tca_canvas::{Canvas, CanvasError, Rgb};
-use tca_nav_danger_map::DangerMap;
+use tca_nav_danger_map::CellDanger;
+use tca_robot::Grid;
 
 use crate::RunReport;
 
-/// Writes a PNG of `danger` (green safe to red barely traversable, black untraversable,
+/// Writes a PNG of the danger map `cells` (green safe to red barely traversable, black untraversable,
 /// grey by how little is known) with the planned path (blue), the estimated path (yellow)
 /// and the true path (white), 3 pixels per cell, north up.
 pub fn write_picture(
-    danger: &DangerMap,
+    cells: &Grid<CellDanger>,
     report: &RunReport,
     path: impl AsRef<Path>,
 ) -> Result<(), CanvasError> {
-    let cells = danger.cells();
     let scale = 3i64;
     let (w, h) = (cells.nx() as i64 * scale, cells.ny() as i64 * scale);
     let mut canvas = Canvas::new(w as u32, h as u32, [128, 128, 128]);

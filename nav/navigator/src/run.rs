@@ -9,7 +9,7 @@ use tca_nav_dstar_lite::{Cell, CostGrid, DStarLite, PlanError};
 use tca_nav_sensing::{DepthCamera, DriftingOdometry, Pose2};
 use tca_robot::{CellIndex, HeightField};
 
-use crate::{Base, Command, NavError, NavParams, Navigator};
+use crate::{Base, Command, NavError, NavParams, Navigator, PerceivedMap};
 
 /// What to run.
 #[derive(Debug, Clone, PartialEq)]
@@ -110,6 +110,10 @@ pub fn true_map_path_m(
 
 /// Runs the navigator on `base` over `terrain` until the goal, a dead end or
 /// `max_frames`. Returns the report and the navigator as it ended (for the picture).
+///
+/// This is the loop in one function; the same modules on the bus (camera and odometry in
+/// the ISM, the maps in the LTM Manager, the base behind its Controller) take the same
+/// steps in the same order and give the same report.
 pub fn run(
     terrain: &HeightField,
     base: &mut dyn Base,
@@ -132,6 +136,7 @@ pub fn run(
     let mut odometry = DriftingOdometry::new(opts.start, opts.drift, opts.seed);
     let period = params.frame_period_s;
     let mount = params.mount;
+    let mut map = PerceivedMap::new(params.clone(), g.origin(), g.resolution_m(), g.nx(), g.ny())?;
     let mut nav = Navigator::new(
         params,
         g.origin(),
@@ -175,7 +180,8 @@ pub fn run(
         let t0 = Instant::now();
         let ground = terrain.height_at(pose.x, pose.y);
         let image = camera.capture(terrain, &mount.camera_pose(&pose, ground));
-        let step = nav.step(est, ground, &image);
+        let changes = map.insert(est, ground, &image);
+        let step = nav.step(est, &changes);
         computing += t0.elapsed().as_secs_f64();
         match step {
             Ok(Command::Reached) => {

@@ -216,7 +216,9 @@ impl DepthCamera {
                 let d = match hit {
                     Some(h) if !untextured && h.range_m > 0.0 => {
                         let z = h.range_m / ray.norm();
-                        let noisy = z + p.noise_per_m * z * z * gaussian(&mut self.rng);
+                        // Delivered as a camera delivers depth: a 32-bit float per pixel.
+                        let noisy =
+                            f64::from((z + p.noise_per_m * z * z * gaussian(&mut self.rng)) as f32);
                         (noisy > 0.0).then_some(noisy)
                     }
                     _ => None,

@@ -1,0 +1,155 @@
+//! A whole navigation run on the bus in one process: central (simulated time, the traffic
+//! logged if asked), the four modules, one `nav.navigate` goal, and the report assembled
+//! from the navigator's `nav.frame` informs and the simulated Controller's record.
+
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use anyhow::Context as _;
+use nalgebra::Point2;
+use tca_central::StartOptions;
+use tca_messages::control::TaskOutcome;
+use tca_module::{Connector, Module};
+use tca_nav_danger_map::CellDanger;
+use tca_nav_messages::{AcquireDepth, DangerMapQuery, FrameOutcome, NavFrame, Navigate, SimStatus};
+use tca_nav_navigator::{RunOptions, RunReport, true_danger_map, true_map_path_m};
+use tca_robot::Grid;
+
+use crate::convert::grid_of;
+use crate::system::{NavSetup, connect_all};
+
+/// A run is over at the latest after this much wall time.
+pub const RUN_TIMEOUT: Duration = Duration::from_secs(1800);
+
+/// What a run on the bus gives: the report and the danger map as the LTM Manager ended.
+#[derive(Debug, Clone)]
+pub struct BusRun {
+    /// The report, in the same shape as the one-process loop's.
+    pub report: RunReport,
+    /// The perceived danger map at the end.
+    pub danger: Grid<CellDanger>,
+    /// Where the traffic was logged, if it was.
+    pub log: Option<PathBuf>,
+}
+
+/// Runs the navigation modules on an in-process central toward `opts`'s goal, logging the
+/// traffic to `log` if given. The report is the one [`tca_nav_navigator::run`] gives for the
+/// same setup, apart from `loop_hz`, which here includes the bus's round trips.
+pub async fn run_on_bus(
+    setup: &NavSetup,
+    opts: &RunOptions,
+    log: Option<PathBuf>,
+) -> anyhow::Result<BusRun> {
+    let central = tca_central::start(StartOptions::simulated(log.clone()))
+        .await
+        .context("cannot start central")?;
+    let connector = Connector::from(central.in_process());
+    let modules = connect_all(&connector, setup)
+        .await
+        .map_err(|e| anyhow::anyhow!("cannot start the navigation modules: {e}"))?;
+    let frames: Arc<Mutex<Vec<NavFrame>>> = Arc::default();
+    let f1 = frames.clone();
+    let runner = Module::builder(format!("nav-runner-{}", std::process::id()))
+        .simulated_time(true)
+        .handle(move |_ctx, f: NavFrame| {
+            f1.lock().unwrap_or_else(|p| p.into_inner()).push(f);
+            async { Ok(()) }
+        })
+        .connect(&connector)
+        .await
+        .context("the runner cannot join central")?;
+    let task = runner.send_watched(
+        &Navigate {
+            dx_m: opts.goal_offset[0],
+            dy_m: opts.goal_offset[1],
+            max_frames: opts.max_frames as u64,
+        },
+        [],
+    )?;
+    let outcome = tokio::time::timeout(RUN_TIMEOUT, task.outcome())
+        .await
+        .map_err(|_| anyhow::anyhow!("the run did not end within {RUN_TIMEOUT:?}"))??;
+    // The informs go out before the goal ends, but give them a moment to arrive.
+    tokio::time::sleep(Duration::from_millis(20)).await;
+    let frames = std::mem::take(&mut *frames.lock().unwrap_or_else(|p| p.into_inner()));
+    let last = frames.last().map(|f| f.outcome);
+    // Out of frames, the odometry has not yet seen the last drive: one more image moves it.
+    let final_estimate = match last {
+        Some(FrameOutcome::Drive) => Some(runner.query(&AcquireDepth).await?.estimate),
+        _ => frames.last().map(|f| f.estimate),
+    };
+    let sim = runner.query(&SimStatus).await?;
+    let danger = grid_of(&runner.query(&DangerMapQuery).await?)?;
+    runner.close().await;
+    for m in modules {
+        m.close().await;
+    }
+    central
+        .shutdown()
+        .await
+        .context("central did not shut down cleanly")?;
+
+    let goal = Point2::new(
+        opts.start.x + opts.goal_offset[0],
+        opts.start.y + opts.goal_offset[1],
+    );
+    let truth = true_danger_map(&setup.terrain, &setup.params)?;
+    let true_path = true_map_path_m(
+        &truth,
+        setup.params.beta,
+        Point2::new(opts.start.x, opts.start.y),
+        goal,
+    )?;
+    let mut path: Vec<[f64; 2]> = sim.poses.iter().map(|p| [p.x_m, p.y_m]).collect();
+    if matches!(last, Some(FrameOutcome::Reached | FrameOutcome::NoPath)) {
+        path.push([sim.pose.x_m, sim.pose.y_m]);
+    }
+    let untraversable_frames = path
+        .iter()
+        .filter(|p| {
+            truth
+                .cells()
+                .cell_at(Point2::new(p[0], p[1]))
+                .is_some_and(|c| !truth.cell(c).is_traversable())
+        })
+        .count() as u64;
+    let (reached, reason) = match (&outcome, last) {
+        (TaskOutcome::Achieved, _) => (true, "goal reached by the estimate".to_string()),
+        (TaskOutcome::Failed(r), _) => (false, r.clone()),
+        (TaskOutcome::Killed, _) => (false, "the navigate goal was killed".to_string()),
+    };
+    let computing: f64 = frames.iter().map(|f| f.loop_s).sum();
+    let est = final_estimate.unwrap_or(sim.pose);
+    let report = RunReport {
+        robot: "wheeled".into(),
+        reached,
+        reason,
+        distance_m: sim.distance_m,
+        final_error_m: (Point2::new(sim.pose.x_m, sim.pose.y_m) - goal).norm(),
+        estimate_error_m: (sim.pose.x_m - est.x_m).hypot(sim.pose.y_m - est.y_m),
+        estimated_path: frames
+            .iter()
+            .map(|f| [f.estimate.x_m, f.estimate.y_m])
+            .collect(),
+        planned_path: frames.last().map(|f| f.path.clone()).unwrap_or_default(),
+        replans: frames.last().map_or(0, |f| f.replans),
+        exploration_turns: frames.last().map_or(0, |f| f.exploration_turns),
+        frames: frames.len(),
+        loop_hz: if computing > 0.0 {
+            frames.len() as f64 / computing
+        } else {
+            0.0
+        },
+        collisions: sim.collisions,
+        falls: sim.falls,
+        untraversable_frames,
+        true_map_path_m: true_path,
+        path,
+    };
+    Ok(BusRun {
+        report,
+        danger,
+        log,
+    })
+}
