@@ -62,6 +62,7 @@ async fn walk_to(dir: &Path, mode: WalkMode) {
         fault: None,
         rigid: false,
         body_move_law: Default::default(),
+        attach: None,
     };
     let (tx, _rx) = mpsc::unbounded_channel();
     let report = within("walk", tca_walk::walk(&options, tx))

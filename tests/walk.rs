@@ -24,6 +24,7 @@ fn options(terrain: TerrainChoice, seed: u64) -> WalkOptions {
         fault: None,
         rigid: false,
         body_move_law: Default::default(),
+        attach: None,
     }
 }
 

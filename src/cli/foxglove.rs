@@ -61,43 +61,133 @@ pub(crate) async fn run(args: FoxgloveArgs) -> anyhow::Result<ExitCode> {
         None => None,
     };
     let me = super::bus::connect(&args.connect, "foxglove").await?;
-    let mut view = tca_foxglove::LiveView::start(&args.host, args.port).await?;
-    let mut registry = me.registry().await?;
-    view.set_formats(formats(&registry));
-    let mut tapping = me.tap(&[]).await.context("central refused the tap")?;
+    let live = Live::start(me, &args.host, args.port).await?;
     eprintln!(
         "serving the Foxglove WebSocket protocol on ws://{}:{} (in Foxglove: Open connection \
          → Foxglove WebSocket); Ctrl-C to stop",
         args.host,
-        view.port()
+        live.view.port()
     );
-    let result = loop {
-        let next = async {
-            match deadline {
-                Some(d) => tokio::time::timeout_at(d, tapping.next()).await.ok(),
-                None => Some(tapping.next().await),
+    live.serve(deadline, true).await
+}
+
+/// A live view tapping central's traffic.
+struct Live {
+    me: tca_module::Module,
+    view: tca_foxglove::LiveView,
+    registry: Registry,
+    tapping: tca_module::module::Tapping,
+}
+
+impl Live {
+    /// Serves on `host:port` the traffic `me` taps (every message name).
+    async fn start(me: tca_module::Module, host: &str, port: u16) -> anyhow::Result<Self> {
+        let mut view = tca_foxglove::LiveView::start(host, port).await?;
+        let registry = me.registry().await?;
+        view.set_formats(formats(&registry));
+        let tapping = me.tap(&[]).await.context("central refused the tap")?;
+        Ok(Live {
+            me,
+            view,
+            registry,
+            tapping,
+        })
+    }
+
+    /// Publishes every tapped message until `deadline`, Ctrl-C (if `on_ctrl_c`) or central
+    /// going away.
+    async fn serve(
+        mut self,
+        deadline: Option<tokio::time::Instant>,
+        on_ctrl_c: bool,
+    ) -> anyhow::Result<ExitCode> {
+        let result = loop {
+            let next = async {
+                match deadline {
+                    Some(d) => tokio::time::timeout_at(d, self.tapping.next()).await.ok(),
+                    None => Some(self.tapping.next().await),
+                }
+            };
+            let ctrl_c = async {
+                if on_ctrl_c {
+                    tokio::signal::ctrl_c().await
+                } else {
+                    std::future::pending().await
+                }
+            };
+            let envelope = tokio::select! {
+                e = next => match e {
+                    None => break Ok(ExitCode::SUCCESS),
+                    Some(None) => break Err(anyhow::anyhow!("central went away or closed the link")),
+                    Some(Some(e)) => e,
+                },
+                r = ctrl_c => {
+                    break r.context("cannot wait for Ctrl-C").map(|_| ExitCode::SUCCESS);
+                }
+            };
+            if !self
+                .registry
+                .entries
+                .iter()
+                .any(|e| e.name == envelope.name)
+            {
+                // A name registered since the view began.
+                self.registry = self.me.registry().await?;
+                self.view.set_formats(formats(&self.registry));
+            }
+            if let Err(e) = self.view.publish(&envelope, now_ns()) {
+                tracing::warn!(error = %e, "cannot publish to Foxglove");
             }
         };
-        let envelope = tokio::select! {
-            e = next => match e {
-                None => break Ok(ExitCode::SUCCESS),
-                Some(None) => break Err(anyhow::anyhow!("central went away or closed the link")),
-                Some(Some(e)) => e,
-            },
-            r = tokio::signal::ctrl_c() => {
-                break r.context("cannot wait for Ctrl-C").map(|_| ExitCode::SUCCESS);
-            }
-        };
-        if !registry.entries.iter().any(|e| e.name == envelope.name) {
-            // A name registered since the view began.
-            registry = me.registry().await?;
-            view.set_formats(formats(&registry));
-        }
-        if let Err(e) = view.publish(&envelope, now_ns()) {
-            tracing::warn!(error = %e, "cannot publish to Foxglove");
-        }
+        self.view.stop().await;
+        self.me.close().await;
+        result
+    }
+}
+
+/// `[HOST:]PORT` of `--foxglove` (loopback when no host is given).
+fn host_port(text: &str) -> anyhow::Result<(String, u16)> {
+    let (host, port) = match text.rsplit_once(':') {
+        Some((h, p)) => (h.to_owned(), p),
+        None => ("127.0.0.1".to_owned(), text),
     };
-    view.stop().await;
-    me.close().await;
-    result
+    let port = port.parse::<u16>().map_err(|_| {
+        anyhow::anyhow!(
+            "--foxglove {text:?} is not [HOST:]PORT; give e.g. 8765 or 0.0.0.0:8765 (0: any free port)"
+        )
+    })?;
+    Ok((host, port))
+}
+
+/// A live view to attach to a run's in-process central (`--foxglove [HOST:]PORT` of
+/// `tca walk` and `tca navigate`): it joins central before the run's modules, so it sees
+/// everything, and serves until central shuts down at the end of the run.
+pub(crate) fn live_attachment(text: &str) -> anyhow::Result<tca_module::Attachment> {
+    let (host, port) = host_port(text)?;
+    Ok(tca_module::Attachment::new(
+        "the Foxglove live view",
+        move |connector: tca_module::Connector| {
+            let host = host.clone();
+            async move {
+                let me = tca_module::Module::builder(format!("foxglove-{}", std::process::id()))
+                    .connect(&connector)
+                    .await
+                    .map_err(|e| format!("cannot join central: {e}"))?;
+                let live = Live::start(me, &host, port)
+                    .await
+                    .map_err(|e| format!("{e:#}"))?;
+                eprintln!(
+                    "serving the Foxglove WebSocket protocol on ws://{host}:{} for this run (in \
+                     Foxglove: Open connection → Foxglove WebSocket)",
+                    live.view.port()
+                );
+                tokio::spawn(async move {
+                    if let Err(e) = live.serve(None, false).await {
+                        tracing::debug!(error = %e, "the live view ended");
+                    }
+                });
+                Ok(())
+            }
+        },
+    ))
 }

@@ -177,6 +177,11 @@ fn options_of(args: &WalkArgs) -> anyhow::Result<LeggedWalkOptions> {
         faults: parse_faults(&args.fault)?,
         planner: LeggedPlanner::parse(&args.planner, args.gait.as_deref())
             .map_err(|e| anyhow::anyhow!("--planner: {e}"))?,
+        attach: args
+            .foxglove
+            .as_deref()
+            .map(super::foxglove::live_attachment)
+            .transpose()?,
     })
 }
 

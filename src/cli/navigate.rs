@@ -1,5 +1,7 @@
 //! `tca navigate`: stereo-camera navigation on rough terrain toward a goal given relative
-//! to the start, in simulation (depth camera, drifting odometry, the true terrain).
+//! to the start, in simulation (depth camera, drifting odometry, the true terrain). By
+//! default the Controller, ISM, LTM Manager and navigator run as modules on a central in
+//! this process; `--direct` runs the same loop as one function (faster, for campaigns).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -7,6 +9,7 @@ use std::process::ExitCode;
 use anyhow::{Context as _, bail};
 use clap::Args;
 use serde_json::json;
+use tca_nav_bus::{NavSetup, run_on_bus_with};
 use tca_nav_navigator::{
     Course, DangerParams, Pose2, RunOptions, RunReport, WheeledBase, WheeledParams, course_by_name,
     run, wheeled_params, write_picture,
@@ -47,9 +50,32 @@ pub(crate) struct NavigateArgs {
     /// paths to this PNG (with several seeds: one file per seed, `-SEED` before `.png`).
     #[arg(long)]
     picture: Option<PathBuf>,
+    /// Write central's traffic log (MCAP) here: every depth image, map update, plan and
+    /// drive command (with several seeds: one file per seed, `-SEED` before `.mcap`).
+    /// `tca log export FILE --foxglove OUT.mcap` turns it into Foxglove's messages.
+    #[arg(long, value_name = "FILE.mcap", conflicts_with = "direct")]
+    log: Option<PathBuf>,
+    /// Watch the run live in Foxglove: serve the Foxglove WebSocket protocol on
+    /// `[HOST:]PORT` (loopback unless a host is given) from this process while it runs.
+    #[arg(long, value_name = "[HOST:]PORT", conflicts_with = "direct")]
+    foxglove: Option<String>,
+    /// Run the loop as one function instead of as modules on the bus (the same steps and
+    /// report; no traffic, so no log).
+    #[arg(long)]
+    direct: bool,
     /// Print JSON.
     #[arg(long)]
     json: bool,
+}
+
+/// `path` with `-SEED` before its extension when several seeds run.
+fn per_seed(path: &std::path::Path, seed: u64, several: bool, ext: &str) -> PathBuf {
+    if several {
+        let stem = path.with_extension("");
+        PathBuf::from(format!("{}-{seed}.{ext}", stem.display()))
+    } else {
+        path.to_path_buf()
+    }
 }
 
 fn numbers(text: &str, what: &str, min: usize, max: usize) -> anyhow::Result<Vec<f64>> {
@@ -119,9 +145,14 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
     if let Some(path) = &args.danger {
         params.danger = DangerParams::read(path)?;
     }
+    let terrain = std::sync::Arc::new(course.terrain.clone());
+    let attach = args
+        .foxglove
+        .as_deref()
+        .map(super::foxglove::live_attachment)
+        .transpose()?;
     let mut reports: Vec<RunReport> = Vec::new();
     for seed in args.seed..args.seed + args.seeds {
-        let mut base = WheeledBase::new(WheeledParams::PIONEER, &course.terrain, course.start);
         let opts = RunOptions {
             start: course.start,
             goal_offset: course.goal_offset,
@@ -129,15 +160,36 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
             seed,
             max_frames: args.max_frames,
         };
-        let (report, nav) = run(&course.terrain, &mut base, params.clone(), &opts)?;
-        if let Some(pic) = &args.picture {
-            let path = if args.seeds > 1 {
-                let stem = pic.with_extension("");
-                PathBuf::from(format!("{}-{seed}.png", stem.display()))
-            } else {
-                pic.clone()
+        let several = args.seeds > 1;
+        let (report, danger) = if args.direct {
+            let mut base = WheeledBase::new(WheeledParams::PIONEER, &course.terrain, course.start);
+            let (report, nav) = run(&course.terrain, &mut base, params.clone(), &opts)?;
+            (report, nav.danger().clone())
+        } else {
+            let setup = NavSetup {
+                terrain: terrain.clone(),
+                wheeled: WheeledParams::PIONEER,
+                params: params.clone(),
+                start: course.start,
+                drift: opts.drift,
+                seed,
             };
-            write_picture(nav.danger(), &report, &path)
+            let log = args
+                .log
+                .as_deref()
+                .map(|l| per_seed(l, seed, several, "mcap"));
+            if let Some(dir) = log.as_deref().and_then(std::path::Path::parent)
+                && !dir.as_os_str().is_empty()
+            {
+                std::fs::create_dir_all(dir)
+                    .with_context(|| format!("create the log's folder {}", dir.display()))?;
+            }
+            let run = run_on_bus_with(&setup, &opts, log, attach.as_ref()).await?;
+            (run.report, run.danger)
+        };
+        if let Some(pic) = &args.picture {
+            let path = per_seed(pic, seed, several, "png");
+            write_picture(&danger, &report, &path)
                 .with_context(|| format!("write the picture {}", path.display()))?;
         }
         if !args.json {

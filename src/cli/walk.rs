@@ -124,6 +124,12 @@ pub(crate) struct WalkArgs {
         conflicts_with_all = ["connect", "robot"]
     )]
     body_move: BodyMoveLaw,
+    /// Watch the walk live in Foxglove: serve the Foxglove WebSocket protocol on
+    /// `[HOST:]PORT` (loopback unless a host is given; Foxglove's usual port is 8765) from
+    /// this process, for as long as the walk runs (in Foxglove: Open connection → Foxglove
+    /// WebSocket → ws://127.0.0.1:PORT). With --connect, run `tca foxglove --connect` instead.
+    #[arg(long, value_name = "[HOST:]PORT", conflicts_with = "connect")]
+    pub(crate) foxglove: Option<String>,
     /// Print the summary as one JSON object on the last line of stdout.
     #[arg(long)]
     pub(crate) json: bool,
@@ -177,6 +183,11 @@ pub(crate) async fn run(args: WalkArgs) -> anyhow::Result<ExitCode> {
         fault: single_leg_fault(&args.fault)?,
         rigid: args.rigid,
         body_move_law: args.body_move,
+        attach: args
+            .foxglove
+            .as_deref()
+            .map(super::foxglove::live_attachment)
+            .transpose()?,
     };
     let (tx, rx) = mpsc::unbounded_channel();
     let display = tokio::spawn(show_progress(rx));

@@ -60,6 +60,9 @@ pub struct LeggedWalkOptions {
     pub faults: Vec<InjectedFault>,
     /// What plans the steps (the free gait by default).
     pub planner: LeggedPlanner,
+    /// Started once central is up, before the modules connect (in-process only): a live
+    /// view, for example.
+    pub attach: Option<tca_module::Attachment>,
 }
 
 impl LeggedWalkOptions {
@@ -78,6 +81,7 @@ impl LeggedWalkOptions {
             connect: None,
             faults: Vec::new(),
             planner: LeggedPlanner::FreeGait,
+            attach: None,
         }
     }
 }
@@ -253,6 +257,11 @@ pub async fn walk(
                 .await
                 .context("cannot start central")?;
             let connector = Connector::from(central.in_process());
+            if let Some(a) = &options.attach {
+                a.attach(connector.clone())
+                    .await
+                    .map_err(|e| anyhow::anyhow!("cannot start {e}"))?;
+            }
             let modules = connect_all(&connector, &setup)
                 .await
                 .map_err(|e| anyhow::anyhow!("cannot start the legged walking modules: {e}"))?;

@@ -294,6 +294,7 @@ async fn one_walk(
         fault: None,
         rigid: false,
         body_move_law: Default::default(),
+        attach: None,
     };
     let (tx, mut rx) = mpsc::unbounded_channel();
     let mut walk = tokio::spawn(async move { tca_walk::walk(&walk_options, tx).await });

@@ -71,6 +71,7 @@
 //! }
 //! ```
 
+pub mod attachment;
 pub mod builder;
 pub mod compute_time;
 pub mod connector;
@@ -81,6 +82,7 @@ mod handler;
 pub mod module;
 pub mod rejoin;
 
+pub use attachment::Attachment;
 pub use builder::{ModuleBuilder, REQUERIES_AFTER_CRASH};
 pub use compute_time::ComputeTime;
 pub use connector::Connector;

@@ -54,6 +54,9 @@ pub struct WalkOptions {
     /// How the simulated Controller propels the carriage (in-process only): the servo, or
     /// the report's first, open-loop procedure.
     pub body_move_law: tca_controller_sim::sim::BodyMoveLaw,
+    /// Started once central is up, before the modules connect (in-process only): a live
+    /// view, for example.
+    pub attach: Option<tca_module::Attachment>,
 }
 
 /// One leg of a walk (forward, or back).
@@ -176,6 +179,11 @@ pub async fn walk(
                 .await
                 .context("cannot start central")?;
             let connector = Connector::from(central.in_process());
+            if let Some(a) = &options.attach {
+                a.attach(connector.clone())
+                    .await
+                    .map_err(|e| anyhow::anyhow!("cannot start {e}"))?;
+            }
             let modules = connect_all(&connector, &setup)
                 .await
                 .context("cannot start the walking modules")?;

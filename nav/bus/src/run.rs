@@ -10,7 +10,7 @@ use anyhow::Context as _;
 use nalgebra::Point2;
 use tca_central::StartOptions;
 use tca_messages::control::TaskOutcome;
-use tca_module::{Connector, Module};
+use tca_module::{Attachment, Connector, Module};
 use tca_nav_danger_map::CellDanger;
 use tca_nav_messages::{AcquireDepth, DangerMapQuery, FrameOutcome, NavFrame, Navigate, SimStatus};
 use tca_nav_navigator::{RunOptions, RunReport, true_danger_map, true_map_path_m};
@@ -41,10 +41,25 @@ pub async fn run_on_bus(
     opts: &RunOptions,
     log: Option<PathBuf>,
 ) -> anyhow::Result<BusRun> {
+    run_on_bus_with(setup, opts, log, None).await
+}
+
+/// [`run_on_bus`] with `attach` joining central before the modules connect (a live view).
+pub async fn run_on_bus_with(
+    setup: &NavSetup,
+    opts: &RunOptions,
+    log: Option<PathBuf>,
+    attach: Option<&Attachment>,
+) -> anyhow::Result<BusRun> {
     let central = tca_central::start(StartOptions::simulated(log.clone()))
         .await
         .context("cannot start central")?;
     let connector = Connector::from(central.in_process());
+    if let Some(a) = attach {
+        a.attach(connector.clone())
+            .await
+            .map_err(|e| anyhow::anyhow!("cannot start {e}"))?;
+    }
     let modules = connect_all(&connector, setup)
         .await
         .map_err(|e| anyhow::anyhow!("cannot start the navigation modules: {e}"))?;
