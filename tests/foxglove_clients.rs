@@ -1,10 +1,11 @@
 //! What tca hands to Foxglove, checked with Foxglove's own client packages in Node
 //! (`tools/foxglove/node`, installed by the test with `npm ci` from the lock file): the
-//! exported MCAP files of a single-leg walk and of a hexapod walk pass the official MCAP
-//! reader (`@mcap/core`) and validate against Foxglove's published JSON schemas
-//! (`@foxglove/schemas`), and a Foxglove WebSocket client (`@foxglove/ws-protocol`)
-//! subscribed to `tca foxglove` during a walk across processes receives the map, the
-//! transforms, the scene and the robot's description, decoded and valid.
+//! exported MCAP files of a single-leg walk, of a hexapod walk and of a navigation on the
+//! hill course pass the official MCAP reader (`@mcap/core`) and validate against Foxglove's
+//! published JSON schemas (`@foxglove/schemas`), and a Foxglove WebSocket client
+//! (`@foxglove/ws-protocol`) subscribed to `tca foxglove` during a walk across processes
+//! receives the map, the transforms, the scene and the robot's description, decoded and
+//! valid.
 
 mod common;
 
@@ -85,15 +86,38 @@ fn topics(stdout: &str) -> BTreeMap<String, u64> {
         .collect()
 }
 
-/// Walks with `walk_args` into `dir`, exports the log for Foxglove and checks the file.
-async fn export_and_check(checker: &Path, dir: &Path, walk_args: &[&str], wanted: &[&str]) {
+/// How a command is told where to leave its traffic log.
+#[derive(Clone, Copy)]
+enum Logged {
+    /// `--out DIR`, the log at `DIR/traffic.mcap` (walks).
+    OutDir,
+    /// `--log DIR/traffic.mcap` (navigations).
+    LogFile,
+}
+
+/// Runs `tca` with `run_args`, its traffic logged in `dir`, exports the log for Foxglove and
+/// checks the file.
+async fn export_and_check(
+    checker: &Path,
+    dir: &Path,
+    run_args: &[&str],
+    logged: Logged,
+    wanted: &[&str],
+) {
     let out = dir.to_string_lossy().into_owned();
-    let mut args = walk_args.to_vec();
-    args.extend(["--out", &out]);
-    let (status, stdout, stderr) = run_tca("a walk", &args, Duration::from_secs(300)).await;
+    let log = dir.join("traffic.mcap");
+    let log_arg = log.to_string_lossy().into_owned();
+    let mut args = run_args.to_vec();
+    match logged {
+        Logged::OutDir => args.extend(["--out", &out]),
+        Logged::LogFile => {
+            std::fs::create_dir_all(dir).unwrap();
+            args.extend(["--log", &log_arg]);
+        }
+    }
+    let (status, stdout, stderr) = run_tca("the run", &args, Duration::from_secs(300)).await;
     assert!(status.success(), "{stdout}\n{stderr}");
     let exported = dir.join("foxglove.mcap");
-    let log = dir.join("traffic.mcap");
     let (status, stdout, stderr) = run_tca(
         "the export",
         &[
@@ -126,6 +150,7 @@ async fn exported_walks_pass_the_mcap_reader_and_foxglove_schemas() {
         checker,
         &dir.path().join("leg"),
         &["walk"],
+        Logged::OutDir,
         &[
             "/map/elevation",
             "/map/footfall",
@@ -141,6 +166,7 @@ async fn exported_walks_pass_the_mcap_reader_and_foxglove_schemas() {
         checker,
         &dir.path().join("hexapod"),
         &["walk", "--robot", "hexapod", "--course", "hexapod-flat"],
+        Logged::OutDir,
         &[
             "/map/elevation",
             "/tf",
@@ -149,6 +175,27 @@ async fn exported_walks_pass_the_mcap_reader_and_foxglove_schemas() {
             "/scanner/range",
             "/log",
             "legged.legMove",
+        ],
+    )
+    .await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_exported_navigation_passes_the_mcap_reader_and_foxglove_schemas() {
+    let Some(checker) = checker() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    export_and_check(
+        checker,
+        &dir.path().join("nav"),
+        &["navigate", "--terrain", "hill"],
+        Logged::LogFile,
+        &[
+            "/camera/depth",
+            "/map/danger",
+            "/tf",
+            "/plan",
+            "/log",
+            "nav.frame",
         ],
     )
     .await;

@@ -2,11 +2,13 @@
 //! and MCAP files of recorded walks, both through Foxglove's own SDK crate.
 //!
 //! Every message name is a channel whose JSON schema is derived from its registered format
-//! ([`schema`], [`traffic`]); the walking systems' traffic also becomes Foxglove's well-known
-//! messages ([`wellknown`]): terrain maps as `foxglove.Grid`, the robot's frames as
-//! `foxglove.FrameTransforms` (with its URDF on a topic for the 3D panel), planned leg paths,
-//! footholds and the support polygon as `foxglove.SceneUpdate`, range images as
-//! `foxglove.RawImage`, walk progress and problems as `foxglove.Log`.
+//! ([`schema`], [`traffic`]); the walking and navigating systems' traffic also becomes
+//! Foxglove's well-known messages ([`wellknown`]): terrain and danger maps as
+//! `foxglove.Grid`, the robot's frames (and a navigating base's estimated and true poses) as
+//! `foxglove.FrameTransforms` (with a legged robot's URDF on a topic for the 3D panel),
+//! planned leg paths, footholds, the support polygon and the navigator's path and goal as
+//! `foxglove.SceneUpdate`, range and depth images as `foxglove.RawImage`, walk and
+//! navigation progress and problems as `foxglove.Log`.
 //!
 //! # Layout
 //!

@@ -1,19 +1,27 @@
-//! Foxglove's well-known messages from the walking systems' traffic.
+//! Foxglove's well-known messages from the walking and navigating systems' traffic.
 //!
 //! [`WellKnownState`] is fed every message a module sends, in order, and returns the
 //! well-known messages that follow from it. It keeps what later messages need: the single
-//! leg's carriage pose, a legged robot's description, body pose and joint positions, and the
+//! leg's carriage pose, a legged robot's description, body pose and joint positions, the
 //! leg moves still under way (a leg's links are placed where a move leaves them when the move
-//! succeeds).
+//! succeeds), and the navigation's danger map (whole from a `nav.dangerMap` reply, then
+//! changed by each `nav.insertDepth` reply).
 //!
 //! | traffic | becomes |
 //! | --- | --- |
 //! | `mapRegion`, `legReachability` replies (terrain maps) | `foxglove.Grid` on `/map/<kind>` |
+//! | `nav.dangerMap` replies, then every `nav.insertDepth` reply applied to the last of them | `foxglove.Grid` on `/map/danger` (fields `danger`, NaN where the cell cannot be crossed, and `certainty`) |
 //! | `bodyPosition`, `globalLegPosition` replies; `legged.bodyPose` replies, `legged.supportState`, `legged.legState` replies, `legged.legMove` successes; `acquireImage` replies (the scanner) | `foxglove.FrameTransforms` on `/tf` |
+//! | `nav.frame` (the odometry's estimate), `nav.truePose` replies (the simulation's truth) | `foxglove.FrameTransforms` on `/tf`: `world → base`, `world → base_true` |
 //! | `legged.robotModel` reply (URDF) | `{"data": URDF}` on `/robot_description` |
-//! | `jointLegPosition` replies, `legMove`, `recoverLeg`, `stepPlanned`; `legged.legMove`, `legged.supportState`, `legged.stepPlanned` | `foxglove.SceneUpdate` on `/plan` |
+//! | `jointLegPosition` replies, `legMove`, `recoverLeg`, `stepPlanned`; `legged.legMove`, `legged.supportState`, `legged.stepPlanned`; `nav.frame` (planned path and goal) | `foxglove.SceneUpdate` on `/plan` |
 //! | `acquireImage` replies (range images) | `foxglove.RawImage` on `/scanner/range` and `/scanner/reflectance` |
-//! | walks, steps, planned steps, failed moves, faults, tip-overs, failures, central's errors | `foxglove.Log` on `/log` |
+//! | `nav.acquireDepth` replies (depth images) | `foxglove.RawImage` (`32FC1`, metres, 0 where there is no depth) on `/camera/depth` |
+//! | walks, navigations, steps, planned steps, failed moves, faults, tip-overs, failures, central's errors | `foxglove.Log` on `/log` |
+//!
+//! The navigation is planar: the base's frames, the path, the goal and the danger map all
+//! lie on `z = 0` of the world frame (the path and goal a little above the map, so they
+//! are not hidden in it).
 
 use std::collections::HashMap;
 
@@ -26,6 +34,7 @@ use nalgebra::{Isometry3, Point3 as P3};
 use serde::Deserialize;
 use tca_legged_model::RobotModel;
 use tca_messages::{Class, Envelope, MessageId, decode_data};
+use tca_nav_messages as nav;
 use tca_robot::{CarriagePose, JointPosition, LegKinematics, LegParams};
 use tca_single_leg_messages as leg;
 
@@ -45,6 +54,10 @@ pub const ROBOT_DESCRIPTION_TOPIC: &str = "/robot_description";
 pub const RANGE_TOPIC: &str = "/scanner/range";
 /// Topic of the reflectance images.
 pub const REFLECTANCE_TOPIC: &str = "/scanner/reflectance";
+/// Topic of the navigation camera's depth images.
+pub const DEPTH_TOPIC: &str = "/camera/depth";
+/// Topic of the navigation's danger map.
+pub const DANGER_TOPIC: &str = "/map/danger";
 /// The world frame.
 pub const WORLD_FRAME: &str = "world";
 /// The single leg's carriage frame.
@@ -53,13 +66,21 @@ pub const CARRIAGE_FRAME: &str = "carriage";
 pub const FOOT_FRAME: &str = "foot";
 /// The range scanner's frame.
 pub const SCANNER_FRAME: &str = "scanner";
+/// The navigation camera's frame (of its depth images; no transform places it).
+pub const CAMERA_FRAME: &str = "camera";
+/// The navigating base as its odometry estimates it.
+pub const BASE_FRAME: &str = "base";
+/// The navigating base where the simulation truly has it.
+pub const BASE_TRUE_FRAME: &str = "base_true";
+/// Height of the navigation's path and goal above the danger map, m.
+const NAV_SCENE_Z_M: f64 = 0.01;
 
 /// One well-known message and where it goes.
 #[derive(Clone, Debug, PartialEq)]
 pub enum WellKnown {
     /// Frame transforms for [`TF_TOPIC`].
     Transforms(FrameTransforms),
-    /// A terrain map on `/map/<kind>`.
+    /// A terrain map on `/map/<kind>`, or the danger map on [`DANGER_TOPIC`].
     Grid {
         /// The topic.
         topic: String,
@@ -68,7 +89,7 @@ pub enum WellKnown {
     },
     /// A scene update for [`PLAN_TOPIC`].
     Scene(SceneUpdate),
-    /// An image on [`RANGE_TOPIC`] or [`REFLECTANCE_TOPIC`].
+    /// An image on [`RANGE_TOPIC`], [`REFLECTANCE_TOPIC`] or [`DEPTH_TOPIC`].
     Image {
         /// The topic.
         topic: &'static str,
@@ -133,6 +154,8 @@ pub struct WellKnownState {
     body: Option<Isometry3<f64>>,
     /// Legged leg moves under way: their leg index and final joint positions.
     leg_moves: HashMap<MessageId, (usize, Vec<f64>)>,
+    /// The navigation's danger map as the traffic last left it.
+    danger: Option<nav::DangerGrid>,
 }
 
 impl Default for WellKnownState {
@@ -145,6 +168,7 @@ impl Default for WellKnownState {
             robot: None,
             body: None,
             leg_moves: HashMap::new(),
+            danger: None,
         }
     }
 }
@@ -284,6 +308,137 @@ pub fn mono16(counts: &[u16], width: u32, height: u32, at_ns: u64) -> Option<Raw
         step: width * 2,
         data: data.into(),
     })
+}
+
+/// A navigation camera's depth image as a Foxglove image: `32FC1` (one little-endian
+/// 32-bit float per pixel, metres along the optical axis, 0 where there is no depth),
+/// row-major, in [`CAMERA_FRAME`]. `None` when the depth count does not match the size.
+pub fn depth_image(frame: &nav::DepthFrame, at_ns: u64) -> Option<RawImage> {
+    let n = (frame.width as usize).checked_mul(frame.height as usize)?;
+    if frame.depth_m.len() != n {
+        return None;
+    }
+    let mut data = Vec::with_capacity(n * 4);
+    for d in &frame.depth_m {
+        data.extend_from_slice(&d.to_le_bytes());
+    }
+    Some(RawImage {
+        timestamp: Some(timestamp(at_ns)),
+        frame_id: CAMERA_FRAME.to_owned(),
+        width: frame.width,
+        height: frame.height,
+        encoding: "32FC1".to_owned(),
+        step: frame.width.checked_mul(4)?,
+        data: data.into(),
+    })
+}
+
+/// Whether a danger map's cell counts match its size and its cells have a usable side.
+fn danger_map_fits(map: &nav::DangerGrid) -> bool {
+    let n = (map.nx as usize).checked_mul(map.ny as usize);
+    n.is_some_and(|n| map.danger.len() == n && map.certainty.len() == n)
+        && map.resolution_m.is_finite()
+        && map.resolution_m > 0.0
+        && map.nx.checked_mul(8).is_some()
+}
+
+/// The navigation's danger map as a Foxglove grid in the world frame, laid out as
+/// [`grid`] lays out terrain maps (the pose at the south-west corner of cell (0, 0), rows
+/// from the south), with two float fields: `danger` (`[0, 1]`, 1 where unknown; NaN where
+/// the cell cannot be crossed) and `certainty` (`[0, 1]`). `None` when the cell counts do
+/// not match the size.
+pub fn danger_grid(map: &nav::DangerGrid, at_ns: u64) -> Option<Grid> {
+    if !danger_map_fits(map) {
+        return None;
+    }
+    let mut data = Vec::with_capacity(map.danger.len() * 8);
+    for (&d, &c) in map.danger.iter().zip(&map.certainty) {
+        let d = if d < 0.0 { f32::NAN } else { d };
+        data.extend_from_slice(&d.to_le_bytes());
+        data.extend_from_slice(&c.to_le_bytes());
+    }
+    let half = map.resolution_m / 2.0;
+    let field = |name: &str, offset: u32| PackedElementField {
+        name: name.to_owned(),
+        offset,
+        r#type: NumericType::Float32 as i32,
+    };
+    Some(Grid {
+        timestamp: Some(timestamp(at_ns)),
+        frame_id: WORLD_FRAME.to_owned(),
+        pose: Some(at(map.origin_x_m - half, map.origin_y_m - half, 0.0)),
+        column_count: map.nx,
+        cell_size: Some(Vector2 {
+            x: map.resolution_m,
+            y: map.resolution_m,
+        }),
+        row_stride: map.nx * 8,
+        cell_stride: 8,
+        fields: vec![field("danger", 0), field("certainty", 4)],
+        data: data.into(),
+    })
+}
+
+/// A planar pose as a transform from the world frame to `child`, on `z = 0`. `None` when
+/// the pose is not finite.
+fn planar_transform(at_ns: u64, child: &str, p: &nav::PlanarPose) -> Option<WellKnown> {
+    if !(p.x_m.is_finite() && p.y_m.is_finite() && p.yaw_rad.is_finite()) {
+        return None;
+    }
+    let iso = rpy_pose(p.x_m, p.y_m, 0.0, 0.0, 0.0, p.yaw_rad);
+    Some(WellKnown::Transforms(FrameTransforms {
+        transforms: vec![transform(at_ns, WORLD_FRAME, child, &iso)],
+    }))
+}
+
+/// The navigator's plan of one frame: the path as a line strip (entity `nav_path`) and the
+/// goal as a sphere (entity `nav_goal`), in the world frame.
+fn nav_plan(f: &nav::NavFrame, at_ns: u64) -> WellKnown {
+    let z = NAV_SCENE_Z_M;
+    let mut path = entity(at_ns, WORLD_FRAME, "nav_path");
+    path.lines.push(line(
+        line_primitive::Type::LineStrip,
+        f.path
+            .iter()
+            .filter(|p| p[0].is_finite() && p[1].is_finite())
+            .map(|p| point(p[0], p[1], z))
+            .collect(),
+    ));
+    let mut goal = entity(at_ns, WORLD_FRAME, "nav_goal");
+    if f.goal[0].is_finite() && f.goal[1].is_finite() {
+        goal.spheres.push(sphere(
+            f.goal[0],
+            f.goal[1],
+            z,
+            0.08,
+            color(1.0, 0.8, 0.1, 0.9),
+        ));
+        goal.texts.push(text(
+            f.goal[0],
+            f.goal[1],
+            z + 0.08,
+            format!("frame {}: {:?}", f.frame, f.outcome),
+        ));
+    }
+    scene(vec![path, goal])
+}
+
+/// Applies a `nav.insertDepth` reply's changed cells to the danger map (cells outside it are
+/// passed over).
+fn apply_danger_changes(map: &mut nav::DangerGrid, changes: &nav::DangerChanges) {
+    let (nx, ny) = (map.nx as usize, map.ny as usize);
+    for c in &changes.cells {
+        let (ix, iy) = (c.ix as usize, c.iy as usize);
+        if ix >= nx || iy >= ny {
+            continue;
+        }
+        let i = iy * nx + ix;
+        if let (Some(d), Some(k)) = (map.danger.get_mut(i), map.certainty.get_mut(i)) {
+            *d = c.danger.map_or(-1.0, |v| v as f32);
+            *k = c.certainty as f32;
+        }
+    }
+    map.frames = changes.frames;
 }
 
 impl WellKnownState {
@@ -569,8 +724,63 @@ impl WellKnownState {
                     format!("tipped over (margin {:.3} m): {}", f.margin_m, f.detail),
                 ));
             }
-            // ---- any walk's end, and every failure
-            (Class::Success, "walk" | "legged.walk") => {
+            // ---- navigation
+            (Class::Reply, "nav.acquireDepth") => {
+                let f: nav::DepthFrame = de(e)?;
+                let image = depth_image(&f, at_ns)
+                    .ok_or("a depth image whose pixels do not match its size")?;
+                out.push(WellKnown::Image {
+                    topic: DEPTH_TOPIC,
+                    image,
+                });
+            }
+            (Class::Reply, "nav.dangerMap") => {
+                let map: nav::DangerGrid = de(e)?;
+                let grid = danger_grid(&map, at_ns)
+                    .ok_or("a danger map whose cells do not match its size")?;
+                self.danger = Some(map);
+                out.push(WellKnown::Grid {
+                    topic: DANGER_TOPIC.to_owned(),
+                    grid,
+                });
+            }
+            (Class::Reply, "nav.insertDepth") => {
+                let changes: nav::DangerChanges = de(e)?;
+                let map = self
+                    .danger
+                    .as_mut()
+                    .ok_or("danger changes before any nav.dangerMap reply gave the map")?;
+                apply_danger_changes(map, &changes);
+                if let Some(grid) = danger_grid(map, at_ns) {
+                    out.push(WellKnown::Grid {
+                        topic: DANGER_TOPIC.to_owned(),
+                        grid,
+                    });
+                }
+            }
+            (Class::Reply, "nav.truePose") => {
+                let p: nav::PlanarPose = de(e)?;
+                out.extend(planar_transform(at_ns, BASE_TRUE_FRAME, &p));
+            }
+            (Class::Inform, "nav.frame") => {
+                let f: nav::NavFrame = de(e)?;
+                out.extend(planar_transform(at_ns, BASE_FRAME, &f.estimate));
+                out.push(nav_plan(&f, at_ns));
+            }
+            (Class::Goal, "nav.navigate") => {
+                let g: nav::Navigate = de(e)?;
+                out.push(log(
+                    at_ns,
+                    Level::Info,
+                    sender,
+                    format!(
+                        "navigate to ({:.3}, {:.3}) m from the start within {} frames",
+                        g.dx_m, g.dy_m, g.max_frames
+                    ),
+                ));
+            }
+            // ---- any walk's or navigation's end, and every failure
+            (Class::Success, "walk" | "legged.walk" | "nav.navigate") => {
                 out.push(log(
                     at_ns,
                     Level::Info,
