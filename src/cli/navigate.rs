@@ -59,6 +59,10 @@ pub(crate) struct NavigateArgs {
     /// `[HOST:]PORT` (loopback unless a host is given) from this process while it runs.
     #[arg(long, value_name = "[HOST:]PORT", conflicts_with = "direct")]
     foxglove: Option<String>,
+    /// The LTM Matcher: register each frame against the map so far and correct the pose the
+    /// frames are placed with and the navigator steers by (reported as `registrations`).
+    #[arg(long)]
+    matcher: bool,
     /// Run the loop as one function instead of as modules on the bus (the same steps and
     /// report; no traffic, so no log).
     #[arg(long)]
@@ -144,6 +148,9 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
     let mut params = wheeled_params();
     if let Some(path) = &args.danger {
         params.danger = DangerParams::read(path)?;
+    }
+    if args.matcher {
+        params.matcher = Some(tca_nav_navigator::MatchParams::default());
     }
     let terrain = std::sync::Arc::new(course.terrain.clone());
     let attach = args

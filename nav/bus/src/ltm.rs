@@ -9,7 +9,7 @@ use tca_module::{Connector, HandlerError, Module, ModuleError};
 use tca_nav_messages::{DangerChanges, DangerMapQuery, InsertDepth};
 use tca_nav_navigator::{NavParams, PerceivedMap};
 
-use crate::convert::{change_msg, depth_of, grid_msg, pose_of};
+use crate::convert::{change_msg, depth_of, grid_msg, pose_msg, pose_of};
 
 /// How the LTM Manager runs.
 #[derive(Debug, Clone)]
@@ -65,9 +65,11 @@ fn insert(
     let image = depth_of(&q.frame, width, height)
         .map_err(|e| HandlerError::new(format!("nav.insertDepth: {e}")))?;
     let mut m = map.lock().unwrap_or_else(|p| p.into_inner());
-    let changes = m.insert(pose_of(&q.frame.estimate), q.frame.ground_m, &image);
+    let inserted = m.insert(pose_of(&q.frame.estimate), q.frame.ground_m, &image);
     Ok(DangerChanges {
         frames: m.frames(),
-        cells: changes.iter().map(change_msg).collect(),
+        estimate: pose_msg(&inserted.estimate),
+        registered: inserted.registration.is_some(),
+        cells: inserted.changes.iter().map(change_msg).collect(),
     })
 }

@@ -82,6 +82,7 @@ async fn navigate(ctx: &Context, params: &NavParams, goal: Navigate) -> Result<(
     )
     .map_err(|e| HandlerError::new(format!("nav.navigate: {e}")))?;
     let mut first = Some(t0);
+    let mut registrations = 0;
     for n in 0..goal.max_frames {
         let t0 = match first.take() {
             Some(t0) => t0,
@@ -94,13 +95,14 @@ async fn navigate(ctx: &Context, params: &NavParams, goal: Navigate) -> Result<(
                 t0
             }
         };
-        let estimate = pose_of(&frame.estimate);
         let changes = ctx
             .query(&InsertDepth {
                 frame: frame.clone(),
             })
             .await
             .map_err(|e| failed("the LTM Manager did not map the frame", e))?;
+        let estimate = pose_of(&changes.estimate);
+        registrations += u64::from(changes.registered);
         let cells: Vec<_> = changes.cells.iter().map(change_of).collect();
         let step = nav.step(estimate, &cells);
         let (outcome, forward, turn) = match &step {
@@ -123,6 +125,7 @@ async fn navigate(ctx: &Context, params: &NavParams, goal: Navigate) -> Result<(
             turn_rps: turn,
             replans: nav.replans(),
             exploration_turns: nav.exploration_turns(),
+            registrations,
             changed_cells: cells.len() as u64,
             loop_s,
         })?;

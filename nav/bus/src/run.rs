@@ -12,7 +12,9 @@ use tca_central::StartOptions;
 use tca_messages::control::TaskOutcome;
 use tca_module::{Attachment, Connector, Module};
 use tca_nav_danger_map::CellDanger;
-use tca_nav_messages::{AcquireDepth, DangerMapQuery, FrameOutcome, NavFrame, Navigate, SimStatus};
+use tca_nav_messages::{
+    AcquireDepth, DangerMapQuery, FrameOutcome, InsertDepth, NavFrame, Navigate, SimStatus,
+};
 use tca_nav_navigator::{RunOptions, RunReport, true_danger_map, true_map_path_m};
 use tca_robot::Grid;
 
@@ -89,9 +91,13 @@ pub async fn run_on_bus_with(
     tokio::time::sleep(Duration::from_millis(20)).await;
     let frames = std::mem::take(&mut *frames.lock().unwrap_or_else(|p| p.into_inner()));
     let last = frames.last().map(|f| f.outcome);
-    // Out of frames, the odometry has not yet seen the last drive: one more image moves it.
+    // Out of frames, the odometry has not yet seen the last drive: one more image moves
+    // it, and the LTM Manager corrects it as it corrects every frame.
     let final_estimate = match last {
-        Some(FrameOutcome::Drive) => Some(runner.query(&AcquireDepth).await?.estimate),
+        Some(FrameOutcome::Drive) => {
+            let frame = runner.query(&AcquireDepth).await?;
+            Some(runner.query(&InsertDepth { frame }).await?.estimate)
+        }
         _ => frames.last().map(|f| f.estimate),
     };
     let sim = runner.query(&SimStatus).await?;
@@ -150,6 +156,7 @@ pub async fn run_on_bus_with(
         planned_path: frames.last().map(|f| f.path.clone()).unwrap_or_default(),
         replans: frames.last().map_or(0, |f| f.replans),
         exploration_turns: frames.last().map_or(0, |f| f.exploration_turns),
+        registrations: frames.last().map_or(0, |f| f.registrations),
         frames: frames.len(),
         loop_hz: if computing > 0.0 {
             frames.len() as f64 / computing

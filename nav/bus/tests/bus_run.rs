@@ -75,3 +75,30 @@ async fn an_impossible_goal_is_refused_with_a_reason() {
     assert!(!r.reached);
     assert!(r.reason.contains("outside the map"), "{}", r.reason);
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn with_the_ltm_matcher_the_bus_run_is_the_one_process_run_too() {
+    let course = hill_course().unwrap();
+    let opts = RunOptions {
+        start: course.start,
+        goal_offset: course.goal_offset,
+        drift: 0.0125,
+        seed: 2,
+        max_frames: 1500,
+    };
+    let mut params = wheeled_params();
+    params.matcher = Some(tca_nav_navigator::MatchParams::default());
+    let mut base = WheeledBase::new(WheeledParams::PIONEER, &course.terrain, course.start);
+    let (direct, _) = run(&course.terrain, &mut base, params.clone(), &opts).unwrap();
+    assert!(direct.registrations > 0, "{direct:?}");
+    let setup = NavSetup {
+        terrain: Arc::new(course.terrain.clone()),
+        wheeled: WheeledParams::PIONEER,
+        params,
+        start: course.start,
+        drift: opts.drift,
+        seed: opts.seed,
+    };
+    let bus = run_on_bus(&setup, &opts, None).await.unwrap();
+    assert_eq!(without_rate(bus.report), without_rate(direct));
+}

@@ -122,11 +122,17 @@ pub struct CellDangerMsg {
     pub certainty: f64,
 }
 
-/// The answer to [`InsertDepth`]: the cells whose danger changed, and the map's frame count.
+/// The answer to [`InsertDepth`]: the cells whose danger or certainty changed, the pose
+/// the frame was placed with, and the map's frame count.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DangerChanges {
     /// Frames in the map so far.
     pub frames: u64,
+    /// The pose the frame was placed with: the odometry's estimate, corrected by the LTM
+    /// Matcher when it is on (the navigator steers by it).
+    pub estimate: PlanarPose,
+    /// Whether the LTM Matcher corrected the pose with this frame.
+    pub registered: bool,
     /// The changed cells.
     pub cells: Vec<CellDangerMsg>,
 }
@@ -186,7 +192,8 @@ pub enum FrameOutcome {
 pub struct NavFrame {
     /// Frame number, from 0.
     pub frame: u64,
-    /// The odometry's estimate.
+    /// The pose the navigator steers by: the odometry's estimate, corrected by the LTM
+    /// Matcher when it is on.
     pub estimate: PlanarPose,
     /// The goal, world frame `[x, y]`.
     pub goal: [f64; 2],
@@ -202,6 +209,8 @@ pub struct NavFrame {
     pub replans: u64,
     /// Exploration turns so far.
     pub exploration_turns: u64,
+    /// Frames the LTM Matcher corrected so far.
+    pub registrations: u64,
     /// Cells whose danger this frame changed.
     pub changed_cells: u64,
     /// Wall time the frame's computing took (acquiring the image, mapping, danger,

@@ -45,6 +45,8 @@ fn a_depth_frame_survives_the_wire() {
     );
     let c = DangerChanges {
         frames: 1,
+        estimate: PlanarPose::default(),
+        registered: true,
         cells: vec![CellDangerMsg {
             ix: 1,
             iy: 2,

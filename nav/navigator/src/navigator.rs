@@ -4,7 +4,7 @@ use nalgebra::Point2;
 use tca_nav_danger_map::{CellDanger, DangerError, DangerMap, DangerParams};
 use tca_nav_dstar_lite::{Cell, CostGrid, DStarLite, PlanError};
 use tca_nav_sensing::{CameraMount, CameraParams, Pose2, wrap};
-use tca_nav_terrain_map::{Ageing, TerrainMapError};
+use tca_nav_terrain_map::{Ageing, MatchParams, TerrainMapError};
 use tca_robot::{CellIndex, Grid};
 
 use crate::CellChange;
@@ -82,6 +82,9 @@ pub struct NavParams {
     pub lookahead_m: f64,
     /// Time between frames, s: each command holds for one frame.
     pub frame_period_s: f64,
+    /// The LTM Matcher: register each frame against the map so far and correct the pose
+    /// frames are placed with (and the navigator steers by); `None`: the odometry alone.
+    pub matcher: Option<MatchParams>,
 }
 
 impl NavParams {
@@ -102,6 +105,7 @@ impl NavParams {
             turn_gain: 1.5,
             lookahead_m: 0.12,
             frame_period_s: 0.25,
+            matcher: None,
         }
     }
 }

@@ -1,10 +1,10 @@
 //! The map side of the loop: depth images into the frame-aged terrain map and the danger
 //! map, patch by patch (what the LTM Manager keeps).
 
-use nalgebra::Point2;
+use nalgebra::{Isometry2, Point2, Point3, Translation2, UnitComplex, Vector2};
 use tca_nav_danger_map::{CellDanger, DangerMap};
 use tca_nav_sensing::{DepthImage, Pose2};
-use tca_nav_terrain_map::TerrainMap;
+use tca_nav_terrain_map::{Registration, TerrainMap};
 use tca_robot::CellIndex;
 
 use crate::{NavError, NavParams};
@@ -18,14 +18,29 @@ pub struct CellChange {
     pub danger: CellDanger,
 }
 
+/// What inserting a frame did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Inserted {
+    /// The cells whose danger or certainty changed.
+    pub changes: Vec<CellChange>,
+    /// The pose the frame was placed with: the odometry's estimate, corrected by the LTM
+    /// Matcher when it is on.
+    pub estimate: Pose2,
+    /// This frame's registration, when the matcher found one.
+    pub registration: Option<Registration>,
+}
+
 /// The terrain map and the danger map built from depth images placed with the estimated
-/// pose.
+/// pose (corrected by the LTM Matcher when it is on).
 #[derive(Debug, Clone)]
 pub struct PerceivedMap {
     params: NavParams,
     terrain: TerrainMap,
     danger: DangerMap,
     frames: u64,
+    /// Correction of odometry estimates, world frame (identity without the matcher).
+    correction: Isometry2<f64>,
+    registrations: u64,
 }
 
 impl PerceivedMap {
@@ -45,6 +60,8 @@ impl PerceivedMap {
             terrain,
             danger,
             frames: 0,
+            correction: Isometry2::identity(),
+            registrations: 0,
         })
     }
 
@@ -63,30 +80,68 @@ impl PerceivedMap {
         self.frames
     }
 
-    /// Inserts one depth image taken from the estimated pose `estimate` standing on
+    /// Frames the LTM Matcher corrected.
+    pub fn registrations(&self) -> u64 {
+        self.registrations
+    }
+
+    /// An odometry estimate corrected as the map corrects them so far.
+    pub fn corrected(&self, estimate: Pose2) -> Pose2 {
+        let p = self.correction * Point2::new(estimate.x, estimate.y);
+        Pose2::new(
+            p.x,
+            p.y,
+            tca_nav_sensing::wrap(estimate.yaw + self.correction.rotation.angle()),
+        )
+    }
+
+    /// Inserts one depth image taken from the odometry's estimate `estimate` standing on
     /// `ground_m`, and recomputes the danger of the patch it saw plus a robot-sized border.
-    /// Returns the cells whose danger or certainty changed.
-    pub fn insert(
-        &mut self,
-        estimate: Pose2,
-        ground_m: f64,
-        image: &DepthImage,
-    ) -> Vec<CellChange> {
+    /// With the matcher on, the frame is first registered against the map so far and placed
+    /// with the corrected pose.
+    pub fn insert(&mut self, estimate: Pose2, ground_m: f64, image: &DepthImage) -> Inserted {
         self.frames += 1;
-        let cam = self.params.mount.camera_pose(&estimate, ground_m);
-        let points = image.points(&self.params.camera, &cam, self.params.map_range_m);
-        let Some(rect) = self.terrain.insert_frame(points) else {
-            return Vec::new();
+        let mut pose = self.corrected(estimate);
+        let cam = self.params.mount.camera_pose(&pose, ground_m);
+        let mut points = image.points(&self.params.camera, &cam, self.params.map_range_m);
+        let mut registration = None;
+        if let Some(m) = &self.params.matcher {
+            let pivot = Point2::new(pose.x, pose.y);
+            if let Some(r) = self.terrain.register(&points, pivot, m) {
+                let step = r.scaled(m.gain);
+                for p in &mut points {
+                    let q = step.apply(pivot, Point2::new(p.x, p.y));
+                    *p = Point3::new(q.x, q.y, p.z);
+                }
+                let delta = Isometry2::from_parts(
+                    Translation2::from(pivot.coords + Vector2::new(step.dx_m, step.dy_m)),
+                    UnitComplex::new(step.dyaw_rad),
+                ) * Isometry2::from_parts(
+                    Translation2::from(-pivot.coords),
+                    UnitComplex::identity(),
+                );
+                self.correction = delta * self.correction;
+                pose = self.corrected(estimate);
+                self.registrations += 1;
+                registration = Some(r);
+            }
+        }
+        let changes = match self.terrain.insert_frame(points) {
+            None => Vec::new(),
+            Some(rect) => self
+                .danger
+                .update(rect, &self.terrain.recent(), &self.terrain.older())
+                .into_iter()
+                .map(|cell| CellChange {
+                    cell,
+                    danger: self.danger.cell(cell),
+                })
+                .collect(),
         };
-        let changed = self
-            .danger
-            .update(rect, &self.terrain.recent(), &self.terrain.older());
-        changed
-            .into_iter()
-            .map(|cell| CellChange {
-                cell,
-                danger: self.danger.cell(cell),
-            })
-            .collect()
+        Inserted {
+            changes,
+            estimate: pose,
+            registration,
+        }
     }
 }

@@ -51,6 +51,8 @@ pub struct RunReport {
     pub replans: u64,
     /// Exploration turns.
     pub exploration_turns: u64,
+    /// Frames the LTM Matcher corrected (0 without it).
+    pub registrations: u64,
     /// Frames run.
     pub frames: usize,
     /// Frames per second of computing (capture, mapping, danger, planning, control).
@@ -158,6 +160,7 @@ pub fn run(
         planned_path: Vec::new(),
         replans: 0,
         exploration_turns: 0,
+        registrations: 0,
         frames: 0,
         loop_hz: 0.0,
         collisions: 0,
@@ -171,7 +174,6 @@ pub fn run(
         report.frames += 1;
         report.path.push([pose.x, pose.y]);
         let est = odometry.estimate();
-        report.estimated_path.push([est.x, est.y]);
         if let Some(c) = truth.cells().cell_at(Point2::new(pose.x, pose.y))
             && !truth.cell(c).is_traversable()
         {
@@ -180,8 +182,10 @@ pub fn run(
         let t0 = Instant::now();
         let ground = terrain.height_at(pose.x, pose.y);
         let image = camera.capture(terrain, &mount.camera_pose(&pose, ground));
-        let changes = map.insert(est, ground, &image);
-        let step = nav.step(est, &changes);
+        let inserted = map.insert(est, ground, &image);
+        let est = inserted.estimate;
+        report.estimated_path.push([est.x, est.y]);
+        let step = nav.step(est, &inserted.changes);
         computing += t0.elapsed().as_secs_f64();
         match step {
             Ok(Command::Reached) => {
@@ -207,7 +211,8 @@ pub fn run(
             Err(e) => return Err(e),
         }
     }
-    let est = odometry.estimate();
+    let est = map.corrected(odometry.estimate());
+    report.registrations = map.registrations();
     report.final_error_m = (Point2::new(pose.x, pose.y) - goal).norm();
     report.estimate_error_m = pose.distance(&est);
     report.planned_path = nav.path().iter().map(|p| [p.x, p.y]).collect();

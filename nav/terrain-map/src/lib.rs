@@ -9,6 +9,10 @@
 //! `recent_frames` (Δf, 20 in the paper) for cells that were traversable, the last
 //! `older_frames` (Δf', 200) for cells that were not.
 
+mod matcher;
+
+pub use matcher::{MatchParams, Registration};
+
 use nalgebra::{Point2, Point3};
 use tca_nav_danger_map::{CellRect, HeightView};
 use tca_robot::{CellIndex, Grid, GridError};

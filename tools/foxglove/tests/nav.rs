@@ -75,6 +75,8 @@ fn hand_made_navigation_messages_become_well_known_ones() {
 
     // Changes before any map are passed over (the map's size is not known).
     let changes = nav::DangerChanges {
+        estimate: pose(1.0, 2.0, 0.0),
+        registered: false,
         frames: 1,
         cells: vec![
             nav::CellDangerMsg {
@@ -147,6 +149,7 @@ fn hand_made_navigation_messages_become_well_known_ones() {
         turn_rps: 0.0,
         replans: 1,
         exploration_turns: 0,
+        registrations: 0,
         changed_cells: 2,
         loop_s: 0.01,
     };
