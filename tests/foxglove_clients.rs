@@ -323,3 +323,56 @@ async fn a_foxglove_client_receives_the_walk_live() {
     view.kill();
     up.interrupt_and_wait("tca up stops").await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_foxglove_client_watches_a_navigation_served_from_its_own_process() {
+    let Some(checker) = checker() else { return };
+    let checker = checker.join("check.mjs");
+    let port = free_port().to_string();
+    // One command: central, the navigation modules and the live view in one process.
+    let mut run = spawn_tca(&[
+        "navigate",
+        "--terrain",
+        "ramps",
+        "--seed",
+        "1",
+        "--foxglove",
+        &port,
+    ]);
+    retry("the live view listens", || async {
+        tokio::net::TcpStream::connect(format!("127.0.0.1:{port}"))
+            .await
+            .map(|_| ())
+    })
+    .await;
+    let out = within_for(
+        Duration::from_secs(240),
+        "the live client",
+        tokio::process::Command::new("node")
+            .arg(&checker)
+            .args([
+                "live",
+                &format!("ws://127.0.0.1:{port}"),
+                "200",
+                "/camera/depth",
+                "/map/danger",
+                "/tf",
+                "/plan",
+            ])
+            .kill_on_drop(true)
+            .output(),
+    )
+    .await
+    .expect("node runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "the live client: {stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let counts = topics(&stdout);
+    for topic in ["/camera/depth", "/map/danger", "/tf", "/plan"] {
+        assert!(counts.get(topic).copied().unwrap_or(0) > 0, "{counts:?}");
+    }
+    run.kill();
+}

@@ -232,7 +232,7 @@ impl TerrainMap {
         // one metre of lever).
         let planar = h.fixed_view::<3, 3>(0, 0).into_owned() / n as f64;
         let min_eig = planar.symmetric_eigenvalues().min();
-        if !(min_eig >= params.min_information) {
+        if min_eig.is_nan() || min_eig < params.min_information {
             return None;
         }
         if !(t[0].hypot(t[1]) <= params.max_shift_m && t[2].abs() <= params.max_turn_rad) {
