@@ -23,6 +23,10 @@ pub(crate) const BUILTIN_MODULES: &[&str] = &[
     "legged-ltm",
     "legged-gait",
     "cgspace-worker",
+    "nav-controller",
+    "nav-ism",
+    "nav-ltm",
+    "nav-navigator",
 ];
 
 #[derive(Debug, Args)]
@@ -30,7 +34,9 @@ pub(crate) struct ModuleArgs {
     /// The built-in module to run: echo; the single leg's controller, ism, ltm, pdm, lrp or
     /// gait; a multi-legged robot's legged-controller, legged-ism, legged-ltm or
     /// legged-gait (with --robot); cgspace-worker (with --index, --robot and --terrain or
-    /// --course), one worker of the distributed CG-space route planner.
+    /// --course), one worker of the distributed CG-space route planner; the navigation
+    /// modules nav-controller, nav-ism, nav-ltm or nav-navigator (with --course ramps|hill
+    /// or --terrain FILE.asc, and --start, --drift, --seed, --matcher as `tca navigate`).
     name: String,
     #[command(flatten)]
     connect: ConnectArgs,
@@ -74,6 +80,12 @@ pub(crate) struct ModuleArgs {
     /// beyond it the least recently used is dropped and recomputed when needed again.
     #[arg(long, value_name = "N")]
     region_cap: Option<usize>,
+    /// Navigation modules: odometry drift, percent of the distance travelled.
+    #[arg(long, default_value_t = 1.25)]
+    drift: f64,
+    /// Navigation modules: the LTM Matcher is on (give nav-ltm and nav-navigator the same).
+    #[arg(long)]
+    matcher: bool,
     /// Seed of the random course and of the scanner noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -117,6 +129,9 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
     let connector = Connector::endpoint(endpoint.clone());
     if args.name == "cgspace-worker" {
         return run_cgspace_worker(&args, &connector, &endpoint).await;
+    }
+    if let Some(inner) = args.name.strip_prefix("nav-") {
+        return run_nav_module(&args, inner, &connector, &endpoint).await;
     }
     if args.index.is_some() || args.region_cap.is_some() {
         anyhow::bail!(
@@ -222,6 +237,44 @@ async fn run_cgspace_worker(
         .await
         .with_context(|| format!("module {name} cannot join central at {endpoint}"))?;
     serve(module, &name, endpoint).await
+}
+
+/// `tca module nav-NAME`: one navigation module, set up as `tca navigate` sets it up.
+async fn run_nav_module(
+    args: &ModuleArgs,
+    inner: &str,
+    connector: &Connector,
+    endpoint: &str,
+) -> anyhow::Result<ExitCode> {
+    let terrain = match (&args.terrain, &args.course) {
+        (Some(path), _) => path.to_string_lossy().into_owned(),
+        (None, Some(course)) => course.clone(),
+        (None, None) => anyhow::bail!(
+            "module {} needs the navigation's terrain: --course ramps|hill or --terrain FILE.asc (with --start)",
+            args.name
+        ),
+    };
+    if !(args.drift.is_finite() && args.drift >= 0.0) {
+        anyhow::bail!(
+            "--drift {} is not valid; give a percentage of at least 0",
+            args.drift
+        );
+    }
+    // A terrain file needs a start; the goal is the navigator's goal's, not the modules'.
+    let goal = args.start.as_ref().map(|_| "0,0");
+    let course = super::navigate::nav_course(&terrain, args.start.as_deref(), goal)?;
+    let setup = tca_nav_bus::NavSetup {
+        terrain: std::sync::Arc::new(course.terrain.clone()),
+        wheeled: tca_nav_navigator::WheeledParams::PIONEER,
+        params: super::navigate::nav_params(None, args.matcher)?,
+        start: course.start,
+        drift: args.drift / 100.0,
+        seed: args.seed,
+    };
+    let module = tca_nav_bus::connect_module(inner, connector, &setup)
+        .await
+        .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
+    serve(module, &args.name, endpoint).await
 }
 
 /// Runs a connected module until Ctrl-C or until central closes its link.

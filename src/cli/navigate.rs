@@ -9,7 +9,7 @@ use std::process::ExitCode;
 use anyhow::{Context as _, bail};
 use clap::Args;
 use serde_json::json;
-use tca_nav_bus::{NavSetup, run_on_bus_with};
+use tca_nav_bus::{NavSetup, run_on_bus_with, run_with};
 use tca_nav_navigator::{
     Course, DangerParams, Pose2, RunOptions, RunReport, WheeledBase, WheeledParams, course_by_name,
     run, wheeled_params, write_picture,
@@ -63,6 +63,11 @@ pub(crate) struct NavigateArgs {
     /// frames are placed with and the navigator steers by (reported as `registrations`).
     #[arg(long)]
     matcher: bool,
+    /// Navigate with the modules already running behind central at this endpoint (each its
+    /// own process, `tca module nav-controller|nav-ism|nav-ltm|nav-navigator`, started with
+    /// the same terrain, start, drift, seed and matcher; `tca up nav.toml` starts them all).
+    #[arg(long, value_name = "ENDPOINT", conflicts_with_all = ["direct", "log", "foxglove"])]
+    connect: Option<String>,
     /// Run the loop as one function instead of as modules on the bus (the same steps and
     /// report; no traffic, so no log).
     #[arg(long)]
@@ -93,36 +98,58 @@ fn numbers(text: &str, what: &str, min: usize, max: usize) -> anyhow::Result<Vec
 }
 
 fn course(args: &NavigateArgs) -> anyhow::Result<Course> {
-    let mut course = match course_by_name(&args.terrain) {
+    nav_course(&args.terrain, args.start.as_deref(), args.goal.as_deref())
+}
+
+/// The course of a navigation: a built-in one (`ramps`, `hill`) or an .asc file (then with
+/// `start` and `goal`), its start and goal overridden by those given.
+pub(crate) fn nav_course(
+    terrain: &str,
+    start: Option<&str>,
+    goal: Option<&str>,
+) -> anyhow::Result<Course> {
+    let mut course = match course_by_name(terrain) {
         Some(c) => c.context("build the course")?,
         None => {
-            let terrain =
-                read_height_field(&args.terrain, NoData::FillLowest).with_context(|| {
-                    format!(
-                        "read the terrain {} (give an .asc file or `ramps`/`hill`)",
-                        args.terrain
-                    )
-                })?;
-            let (Some(_), Some(_)) = (&args.start, &args.goal) else {
+            let field = read_height_field(terrain, NoData::FillLowest).with_context(|| {
+                format!("read the terrain {terrain} (give an .asc file or `ramps`/`hill`)")
+            })?;
+            let (Some(_), Some(_)) = (start, goal) else {
                 bail!("--start and --goal are needed with a terrain file");
             };
             Course {
                 name: "file",
-                terrain,
+                terrain: field,
                 start: Pose2::default(),
                 goal_offset: [0.0, 0.0],
             }
         }
     };
-    if let Some(s) = &args.start {
+    if let Some(s) = start {
         let v = numbers(s, "start", 2, 3)?;
         course.start = Pose2::new(v[0], v[1], v.get(2).copied().unwrap_or(0.0));
     }
-    if let Some(g) = &args.goal {
+    if let Some(g) = goal {
         let v = numbers(g, "goal", 2, 2)?;
         course.goal_offset = [v[0], v[1]];
     }
     Ok(course)
+}
+
+/// The wheeled base's navigation parameters, with another danger file and the LTM Matcher
+/// if asked.
+pub(crate) fn nav_params(
+    danger: Option<&std::path::Path>,
+    matcher: bool,
+) -> anyhow::Result<tca_nav_navigator::NavParams> {
+    let mut params = wheeled_params();
+    if let Some(path) = danger {
+        params.danger = DangerParams::read(path)?;
+    }
+    if matcher {
+        params.matcher = Some(tca_nav_navigator::MatchParams::default());
+    }
+    Ok(params)
 }
 
 pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode> {
@@ -145,13 +172,7 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
         bail!("--seeds must be at least 1");
     }
     let course = course(&args)?;
-    let mut params = wheeled_params();
-    if let Some(path) = &args.danger {
-        params.danger = DangerParams::read(path)?;
-    }
-    if args.matcher {
-        params.matcher = Some(tca_nav_navigator::MatchParams::default());
-    }
+    let params = nav_params(args.danger.as_deref(), args.matcher)?;
     let terrain = std::sync::Arc::new(course.terrain.clone());
     let attach = args
         .foxglove
@@ -191,7 +212,13 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
                 std::fs::create_dir_all(dir)
                     .with_context(|| format!("create the log's folder {}", dir.display()))?;
             }
-            let run = run_on_bus_with(&setup, &opts, log, attach.as_ref()).await?;
+            let run = match &args.connect {
+                Some(endpoint) => {
+                    let connector = tca_module::Connector::endpoint(endpoint.clone());
+                    run_with(&connector, &setup, &opts, None).await?
+                }
+                None => run_on_bus_with(&setup, &opts, log, attach.as_ref()).await?,
+            };
             (run.report, run.danger)
         };
         if let Some(pic) = &args.picture {

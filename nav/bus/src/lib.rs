@@ -20,5 +20,5 @@ pub mod navigator;
 mod run;
 mod system;
 
-pub use run::{BusRun, RUN_TIMEOUT, run_on_bus, run_on_bus_with};
+pub use run::{BusRun, RUN_TIMEOUT, run_on_bus, run_on_bus_with, run_with};
 pub use system::{NAV_MODULES, NavSetup, connect_all, connect_module};

@@ -65,6 +65,26 @@ pub async fn run_on_bus_with(
     let modules = connect_all(&connector, setup)
         .await
         .map_err(|e| anyhow::anyhow!("cannot start the navigation modules: {e}"))?;
+    let run = run_with(&connector, setup, opts, log).await;
+    for m in modules {
+        m.close().await;
+    }
+    central
+        .shutdown()
+        .await
+        .context("central did not shut down cleanly")?;
+    run
+}
+
+/// Runs one `nav.navigate` goal on the modules already connected behind `connector`'s
+/// central (in this process or others, started with the same setup), and assembles the
+/// report. `log` is only passed on to the result.
+pub async fn run_with(
+    connector: &Connector,
+    setup: &NavSetup,
+    opts: &RunOptions,
+    log: Option<PathBuf>,
+) -> anyhow::Result<BusRun> {
     let frames: Arc<Mutex<Vec<NavFrame>>> = Arc::default();
     let f1 = frames.clone();
     let runner = Module::builder(format!("nav-runner-{}", std::process::id()))
@@ -73,9 +93,9 @@ pub async fn run_on_bus_with(
             f1.lock().unwrap_or_else(|p| p.into_inner()).push(f);
             async { Ok(()) }
         })
-        .connect(&connector)
+        .connect(connector)
         .await
-        .context("the runner cannot join central")?;
+        .with_context(|| format!("the runner cannot join central ({})", connector.describe()))?;
     let task = runner.send_watched(
         &Navigate {
             dx_m: opts.goal_offset[0],
@@ -103,13 +123,6 @@ pub async fn run_on_bus_with(
     let sim = runner.query(&SimStatus).await?;
     let danger = grid_of(&runner.query(&DangerMapQuery).await?)?;
     runner.close().await;
-    for m in modules {
-        m.close().await;
-    }
-    central
-        .shutdown()
-        .await
-        .context("central did not shut down cleanly")?;
 
     let goal = Point2::new(
         opts.start.x + opts.goal_offset[0],
