@@ -263,30 +263,50 @@ pub fn grid(map: &leg::MapGrid, at_ns: u64) -> Option<Grid> {
             data.extend_from_slice(&v.to_le_bytes());
         }
     }
-    let half = map.resolution_m / 2.0;
-    let field = |name: &str, offset: u32| PackedElementField {
-        name: name.to_owned(),
-        offset,
-        r#type: NumericType::Float32 as i32,
-    };
-    Some(Grid {
+    Some(float_grid(
+        [map.origin_x_m, map.origin_y_m],
+        map.resolution_m,
+        map.nx,
+        &["value", "sigma_m", "occluded_max_m"],
+        data,
+        at_ns,
+    ))
+}
+
+/// A grid of float32 fields `names`, in that order in each cell, cell (0, 0) centred at
+/// `origin` in the world frame (the grid's pose is that cell's south-west corner).
+fn float_grid(
+    origin: [f64; 2],
+    resolution_m: f64,
+    nx: u32,
+    names: &[&str],
+    data: Vec<u8>,
+    at_ns: u64,
+) -> Grid {
+    let half = resolution_m / 2.0;
+    let stride = 4 * names.len() as u32;
+    Grid {
         timestamp: Some(timestamp(at_ns)),
         frame_id: WORLD_FRAME.to_owned(),
-        pose: Some(at(map.origin_x_m - half, map.origin_y_m - half, 0.0)),
-        column_count: map.nx,
+        pose: Some(at(origin[0] - half, origin[1] - half, 0.0)),
+        column_count: nx,
         cell_size: Some(Vector2 {
-            x: map.resolution_m,
-            y: map.resolution_m,
+            x: resolution_m,
+            y: resolution_m,
         }),
-        row_stride: map.nx * 12,
-        cell_stride: 12,
-        fields: vec![
-            field("value", 0),
-            field("sigma_m", 4),
-            field("occluded_max_m", 8),
-        ],
+        row_stride: nx * stride,
+        cell_stride: stride,
+        fields: names
+            .iter()
+            .zip(0u32..)
+            .map(|(name, i)| PackedElementField {
+                name: (*name).to_owned(),
+                offset: 4 * i,
+                r#type: NumericType::Float32 as i32,
+            })
+            .collect(),
         data: data.into(),
-    })
+    }
 }
 
 /// A 16-bit image (`mono16`, little-endian) of `width` x `height` counts, row-major.
@@ -357,26 +377,14 @@ pub fn danger_grid(map: &nav::DangerGrid, at_ns: u64) -> Option<Grid> {
         data.extend_from_slice(&d.to_le_bytes());
         data.extend_from_slice(&c.to_le_bytes());
     }
-    let half = map.resolution_m / 2.0;
-    let field = |name: &str, offset: u32| PackedElementField {
-        name: name.to_owned(),
-        offset,
-        r#type: NumericType::Float32 as i32,
-    };
-    Some(Grid {
-        timestamp: Some(timestamp(at_ns)),
-        frame_id: WORLD_FRAME.to_owned(),
-        pose: Some(at(map.origin_x_m - half, map.origin_y_m - half, 0.0)),
-        column_count: map.nx,
-        cell_size: Some(Vector2 {
-            x: map.resolution_m,
-            y: map.resolution_m,
-        }),
-        row_stride: map.nx * 8,
-        cell_stride: 8,
-        fields: vec![field("danger", 0), field("certainty", 4)],
-        data: data.into(),
-    })
+    Some(float_grid(
+        [map.origin_x_m, map.origin_y_m],
+        map.resolution_m,
+        map.nx,
+        &["danger", "certainty"],
+        data,
+        at_ns,
+    ))
 }
 
 /// A planar pose as a transform from the world frame to `child`, on `z = 0`. `None` when
