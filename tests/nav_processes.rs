@@ -73,4 +73,6 @@ async fn a_navigation_module_without_its_terrain_is_refused_with_what_to_give() 
         "tcp/127.0.0.1:1",
     ]);
     assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no navigation module named"), "{err}");
 }

@@ -65,7 +65,7 @@ async fn navigate(ctx: &Context, params: &NavParams, goal: Navigate) -> Result<(
         .await
         .map_err(|e| failed("the LTM Manager did not describe its map", e))?;
     let t0 = Instant::now();
-    let mut frame: DepthFrame = ctx
+    let frame: DepthFrame = ctx
         .query(&AcquireDepth)
         .await
         .map_err(|e| failed("the ISM gave no depth image", e))?;
@@ -81,24 +81,23 @@ async fn navigate(ctx: &Context, params: &NavParams, goal: Navigate) -> Result<(
         target,
     )
     .map_err(|e| HandlerError::new(format!("nav.navigate: {e}")))?;
-    let mut first = Some(t0);
+    // The first frame, taken to learn the start, is the first the loop maps.
+    let mut first = Some((t0, frame));
     let mut registrations = 0;
     for n in 0..goal.max_frames {
-        let t0 = match first.take() {
-            Some(t0) => t0,
+        let (t0, frame) = match first.take() {
+            Some(taken) => taken,
             None => {
                 let t0 = Instant::now();
-                frame = ctx
+                let frame = ctx
                     .query(&AcquireDepth)
                     .await
                     .map_err(|e| failed("the ISM gave no depth image", e))?;
-                t0
+                (t0, frame)
             }
         };
         let changes = ctx
-            .query(&InsertDepth {
-                frame: frame.clone(),
-            })
+            .query(&InsertDepth { frame })
             .await
             .map_err(|e| failed("the LTM Manager did not map the frame", e))?;
         let estimate = pose_of(&changes.estimate);

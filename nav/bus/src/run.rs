@@ -148,10 +148,10 @@ pub async fn run_with(
                 .is_some_and(|c| !truth.cell(c).is_traversable())
         })
         .count() as u64;
-    let (reached, reason) = match (&outcome, last) {
-        (TaskOutcome::Achieved, _) => (true, "goal reached by the estimate".to_string()),
-        (TaskOutcome::Failed(r), _) => (false, r.clone()),
-        (TaskOutcome::Killed, _) => (false, "the navigate goal was killed".to_string()),
+    let (reached, reason) = match outcome {
+        TaskOutcome::Achieved => (true, "goal reached by the estimate".to_string()),
+        TaskOutcome::Failed(r) => (false, r),
+        TaskOutcome::Killed => (false, "the navigate goal was killed".to_string()),
     };
     let computing: f64 = frames.iter().map(|f| f.loop_s).sum();
     let est = final_estimate.unwrap_or(sim.pose);
