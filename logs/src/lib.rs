@@ -10,7 +10,8 @@
 //!
 //! - [`record`]: the record types central produces.
 //! - [`layout`]: how records map onto MCAP channels, schemas and encodings.
-//! - [`writer`]: [`LogWriter`] (MCAP) and [`LogSink`], the writer on its own thread.
+//! - [`writer`]: [`LogWriter`] (MCAP).
+//! - [`sink`]: [`LogSink`], the writer on its own thread.
 //! - [`reader`]: [`LogFile`], reading a log back (lenient about a truncated tail).
 //! - [`show`]: rendering a log as readable lines with filters.
 //! - [`stats`]: the Figure 18 breakdown (computing, waiting, idle per module), latencies.
@@ -30,6 +31,7 @@ pub mod reader;
 pub mod record;
 pub mod script;
 pub mod show;
+pub mod sink;
 pub mod stats;
 pub mod timecheck;
 pub mod writer;
@@ -45,6 +47,7 @@ pub use record::{
 };
 pub use script::{ModuleScript, RootTask, connection_order, module_script, root_tasks};
 pub use show::{ShowFilter, render, tree_at};
+pub use sink::LogSink;
 pub use stats::{LogStats, ModuleStats, QueryStats, Span, TimeBase, stats};
 pub use timecheck::{TimeCheck, time_check};
-pub use writer::{FLUSH_INTERVAL, LogSink, LogWriter, set_aside};
+pub use writer::{FLUSH_INTERVAL, LogWriter, set_aside};

@@ -6,10 +6,7 @@ use rustc_hash::FxHashMap as HashMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, mpsc};
-use std::thread::JoinHandle;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use serde::Serialize;
 use tca_messages::control::Registration;
@@ -209,129 +206,6 @@ impl LogWriter {
         self.frame_channels.insert((name.clone(), version), channel);
         Ok(channel)
     }
-}
-
-enum SinkInput {
-    Records(Vec<LogRecord>),
-    Finish,
-}
-
-/// A log writer on its own thread: `append` never blocks central on disk I/O. The thread
-/// flushes every [`FLUSH_INTERVAL`], so the file is readable up to ~50 ms before a crash.
-pub struct LogSink {
-    tx: mpsc::Sender<SinkInput>,
-    thread: Option<JoinHandle<Result<()>>>,
-    /// Records queued and not yet written.
-    backlog: Arc<AtomicUsize>,
-}
-
-impl LogSink {
-    /// Creates the file and starts the writer thread.
-    pub fn create(path: &Path) -> Result<Self> {
-        let writer = LogWriter::create(path)?;
-        let (tx, rx) = mpsc::channel();
-        let backlog = Arc::new(AtomicUsize::new(0));
-        let written = backlog.clone();
-        let thread = std::thread::Builder::new()
-            .name("tca-log".into())
-            .spawn(move || run_sink(writer, rx, &written))
-            .map_err(|e| LogError::WriterGone(e.to_string()))?;
-        Ok(LogSink {
-            tx,
-            thread: Some(thread),
-            backlog,
-        })
-    }
-
-    /// Records queued and not yet written: what the writer thread has still to do.
-    pub fn backlog(&self) -> usize {
-        self.backlog.load(Ordering::Relaxed)
-    }
-
-    /// Queues a record.
-    pub fn append(&mut self, record: LogRecord) {
-        self.append_batch(vec![record]);
-    }
-
-    /// Queues records (one wake-up of the writer thread for the lot).
-    pub fn append_batch(&mut self, records: Vec<LogRecord>) {
-        if records.is_empty() {
-            return;
-        }
-        let count = records.len();
-        self.backlog.fetch_add(count, Ordering::Relaxed);
-        if self.tx.send(SinkInput::Records(records)).is_err() {
-            self.backlog.fetch_sub(count, Ordering::Relaxed);
-            tracing::error!("log writer thread has stopped; traffic is no longer logged");
-        }
-    }
-
-    /// Writes what is queued, the summary, and closes the file.
-    pub fn finish(mut self) -> Result<()> {
-        let _ = self.tx.send(SinkInput::Finish);
-        match self.thread.take() {
-            Some(t) => t
-                .join()
-                .map_err(|_| LogError::WriterGone("writer thread panicked".into()))?,
-            None => Ok(()),
-        }
-    }
-}
-
-impl Drop for LogSink {
-    fn drop(&mut self) {
-        if let Some(t) = self.thread.take() {
-            let _ = self.tx.send(SinkInput::Finish);
-            let _ = t.join();
-        }
-    }
-}
-
-fn run_sink(
-    mut writer: LogWriter,
-    rx: mpsc::Receiver<SinkInput>,
-    backlog: &AtomicUsize,
-) -> Result<()> {
-    let mut dirty = false;
-    let mut last_flush = Instant::now();
-    let mut finishing = false;
-    while !finishing {
-        let wait = if dirty {
-            FLUSH_INTERVAL.saturating_sub(last_flush.elapsed())
-        } else {
-            // Nothing to flush: sleep until something arrives.
-            Duration::from_secs(3600)
-        };
-        let mut next = match rx.recv_timeout(wait) {
-            Ok(input) => Some(input),
-            Err(mpsc::RecvTimeoutError::Timeout) => None,
-            Err(mpsc::RecvTimeoutError::Disconnected) => break,
-        };
-        // Write everything already queued before looking at the clock again.
-        while let Some(input) = next.take() {
-            match input {
-                SinkInput::Records(records) => {
-                    for r in &records {
-                        if let Err(e) = writer.append(r) {
-                            tracing::error!(error = %e, "cannot write log record");
-                        }
-                    }
-                    backlog.fetch_sub(records.len(), Ordering::Relaxed);
-                    dirty = true;
-                }
-                SinkInput::Finish => finishing = true,
-            }
-            if !finishing {
-                next = rx.try_recv().ok();
-            }
-        }
-        if dirty && last_flush.elapsed() >= FLUSH_INTERVAL {
-            writer.flush()?;
-            dirty = false;
-            last_flush = Instant::now();
-        }
-    }
-    writer.finish()
 }
 
 /// Moves an existing, non-empty log at `path` aside to the first free `STEM.N.mcap` next to it
