@@ -2,6 +2,7 @@
 //! and over zenoh loopback, logging on; with the baselines measured in the same run (a raw
 //! tokio channel round trip, a raw zenoh get/queryable round trip through a router) and
 //! central's own cost per message (the sans-I/O core plus the log writer, no transport).
+//! Every timing loop runs as a task on a runtime worker, as the `tca` command runs its work.
 //!
 //! Run: `cargo bench --bench bus` (figures in BENCHMARKS.md).
 
@@ -19,6 +20,9 @@ use tca_ping::echo::{self, Ping, PingGoal};
 
 #[path = "common/goal_flood.rs"]
 mod goal_flood;
+#[path = "common/on_worker.rs"]
+mod on_worker;
+use on_worker::time_on_worker;
 use tokio::runtime::Runtime;
 use tokio::sync::{Notify, mpsc};
 
@@ -49,13 +53,17 @@ fn raw_tokio(c: &mut Criterion, rt: &Runtime) {
     });
     let rep_rx = Arc::new(tokio::sync::Mutex::new(rep_rx));
     c.bench_function("baseline/tokio_channel_round_trip", |b| {
-        b.to_async(rt).iter(|| {
+        b.iter_custom(|iters| {
             let req_tx = req_tx.clone();
             let rep_rx = rep_rx.clone();
-            async move {
-                req_tx.send(Bytes::from_static(b"ping")).unwrap();
-                rep_rx.lock().await.recv().await.unwrap()
-            }
+            time_on_worker(rt, iters, move || {
+                let req_tx = req_tx.clone();
+                let rep_rx = rep_rx.clone();
+                async move {
+                    req_tx.send(Bytes::from_static(b"ping")).unwrap();
+                    rep_rx.lock().await.recv().await.unwrap()
+                }
+            })
         })
     });
 }
@@ -91,16 +99,19 @@ fn raw_zenoh(c: &mut Criterion, rt: &Runtime) {
         (router, asker, (answerer, queryable))
     });
     c.bench_function("baseline/zenoh_get_queryable_round_trip", |b| {
-        b.to_async(rt).iter(|| {
+        b.iter_custom(|iters| {
             let asker = asker.clone();
-            async move {
-                let replies = asker
-                    .get("bench/echo")
-                    .payload(vec![0u8; 16])
-                    .await
-                    .unwrap();
-                replies.recv_async().await.unwrap()
-            }
+            time_on_worker(rt, iters, move || {
+                let asker = asker.clone();
+                async move {
+                    let replies = asker
+                        .get("bench/echo")
+                        .payload(vec![0u8; 16])
+                        .await
+                        .unwrap();
+                    replies.recv_async().await.unwrap()
+                }
+            })
         })
     });
     drop(router);
@@ -152,17 +163,20 @@ fn routed_query(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
         "central/inproc_routed_query_round_trip"
     };
     c.bench_function(name, |b| {
-        b.to_async(rt).iter(|| {
+        b.iter_custom(|iters| {
             let pinger = bus.pinger.clone();
-            async move {
-                pinger
-                    .query(&Ping {
-                        seq: 1,
-                        payload: vec![0; 16],
-                    })
-                    .await
-                    .unwrap()
-            }
+            time_on_worker(rt, iters, move || {
+                let pinger = pinger.clone();
+                async move {
+                    pinger
+                        .query(&Ping {
+                            seq: 1,
+                            payload: vec![0; 16],
+                        })
+                        .await
+                        .unwrap()
+                }
+            })
         })
     });
     rt.block_on(async { bus.central.shutdown().await.unwrap() });

@@ -7,7 +7,8 @@
 //! the echo module as another (`tca module echo`), and the pinger here: three processes, as
 //! CMU IPC's two-module test through its central. Goal throughput: a sender and a sink here,
 //! each on its own link to the central process. Besides criterion's figures, each routed
-//! round trip prints its p50 and p99 over 20,000 samples.
+//! round trip prints its p50 and p99 over 20,000 samples. Every timing loop runs as a task on
+//! a runtime worker, as the `tca` command runs its work.
 //!
 //! Run: `cargo bench --bench local_link` (figures in BENCHMARKS.md, "Same-machine link").
 
@@ -15,7 +16,7 @@ use std::io::{Read, Write};
 use std::process::{Child, Command, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use bytes::Bytes;
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -25,6 +26,9 @@ use tca_ping::echo::{self, Ping, PingGoal};
 
 #[path = "common/goal_flood.rs"]
 mod goal_flood;
+#[path = "common/on_worker.rs"]
+mod on_worker;
+use on_worker::{samples_on_worker, time_on_worker};
 use tokio::runtime::Runtime;
 use tokio::sync::{Notify, mpsc};
 
@@ -141,13 +145,17 @@ fn raw_tokio(c: &mut Criterion, rt: &Runtime) {
     });
     let rep_rx = Arc::new(tokio::sync::Mutex::new(rep_rx));
     c.bench_function("baseline/tokio_channel_round_trip", |b| {
-        b.to_async(rt).iter(|| {
+        b.iter_custom(|iters| {
             let req_tx = req_tx.clone();
             let rep_rx = rep_rx.clone();
-            async move {
-                req_tx.send(Bytes::from_static(b"ping")).unwrap();
-                rep_rx.lock().await.recv().await.unwrap()
-            }
+            time_on_worker(rt, iters, move || {
+                let req_tx = req_tx.clone();
+                let rep_rx = rep_rx.clone();
+                async move {
+                    req_tx.send(Bytes::from_static(b"ping")).unwrap();
+                    rep_rx.lock().await.recv().await.unwrap()
+                }
+            })
         })
     });
 }
@@ -170,17 +178,20 @@ fn raw_unix_socket(c: &mut Criterion, rt: &Runtime) {
     let client = rt.block_on(async { tokio::net::UnixStream::from_std(client).unwrap() });
     let client = Arc::new(tokio::sync::Mutex::new(client));
     c.bench_function("baseline/unix_socket_echo_round_trip", |b| {
-        b.to_async(rt).iter(|| {
+        b.iter_custom(|iters| {
             let client = client.clone();
-            async move {
-                use tokio::io::{AsyncReadExt, AsyncWriteExt};
-                let mut s = client.lock().await;
-                let mut frame = [0u8; 20];
-                frame[..4].copy_from_slice(&16u32.to_le_bytes());
-                s.write_all(&frame).await.unwrap();
-                s.read_exact(&mut frame).await.unwrap();
-                frame
-            }
+            time_on_worker(rt, iters, move || {
+                let client = client.clone();
+                async move {
+                    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+                    let mut s = client.lock().await;
+                    let mut frame = [0u8; 20];
+                    frame[..4].copy_from_slice(&16u32.to_le_bytes());
+                    s.write_all(&frame).await.unwrap();
+                    s.read_exact(&mut frame).await.unwrap();
+                    frame
+                }
+            })
         })
     });
 }
@@ -188,20 +199,20 @@ fn raw_unix_socket(c: &mut Criterion, rt: &Runtime) {
 /// Times routed query round trips from `pinger` (criterion), then prints p50/p99.
 fn routed_query(c: &mut Criterion, rt: &Runtime, name: &str, pinger: &Module) {
     c.bench_function(name, |b| {
-        b.to_async(rt).iter(|| {
+        b.iter_custom(|iters| {
             let pinger = pinger.clone();
-            async move { pinger.query(&ping()).await.unwrap() }
+            time_on_worker(rt, iters, move || {
+                let pinger = pinger.clone();
+                async move { pinger.query(&ping()).await.unwrap() }
+            })
         })
     });
-    let report = rt.block_on(async {
-        let mut samples = Vec::with_capacity(PERCENTILE_SAMPLES);
-        for _ in 0..PERCENTILE_SAMPLES {
-            let start = Instant::now();
-            pinger.query(&ping()).await.unwrap();
-            samples.push(start.elapsed());
-        }
-        tca_ping::report(&mut samples)
+    let asker = pinger.clone();
+    let mut samples = samples_on_worker(rt, PERCENTILE_SAMPLES, move || {
+        let asker = asker.clone();
+        async move { asker.query(&ping()).await.unwrap() }
     });
+    let report = tca_ping::report(&mut samples);
     eprintln!(
         "{name}: {} samples: min {:.1} µs, p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs",
         report.n, report.min_us, report.p50_us, report.p99_us, report.max_us

@@ -77,7 +77,7 @@ pub struct ReplayPlan {
 }
 
 /// The live half of a replay: which recorded modules run live, and how they are set up.
-pub trait LiveSide {
+pub trait LiveSide: Send + Sync {
     /// Whether recorded `module` (neither played from the log nor the originator) runs live;
     /// others are left out of the replay, with a warning.
     fn runs_live(&self, module: &str) -> bool;
