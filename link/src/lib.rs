@@ -45,7 +45,7 @@ pub use inproc::{InProcLink, InProcSender, InProcTransport};
 pub use local::{LocalEndpoint, LocalListener, LocalTransport, PeerPolicy};
 pub use outbox::{FrameReceiver, Gauge, OutboxLimits, OutboxUse};
 pub use transport::{FrameSender, Link, Presence, SendFrame, Transport};
-pub use zenoh::{ZenohLogin, ZenohTransport};
+pub use zenoh::{TlsFiles, ZenohLogin, ZenohTransport};
 
 /// A link's number, given by central when the link opens. It is also the high half of every
 /// message id the module on it sends.

@@ -35,7 +35,8 @@ pub(crate) struct CentralArgs {
     #[arg(long, default_value_t = CentralConfig::default().max_frame_bytes)]
     max_frame_bytes: usize,
     /// Registration policy (TOML): identities and secrets modules must present, what each may
-    /// register and send, and optionally a zenoh users file (see policy.example.toml).
+    /// register and send, and optionally a zenoh users file and TLS files, with which the
+    /// zenoh router confines each identity to its own keys (see policy.example.toml).
     #[arg(long, value_name = "FILE")]
     policy: Option<PathBuf>,
     /// Most frames of one module waiting to be handled by central; more are refused.
@@ -125,8 +126,12 @@ pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
         .context("cannot wait for Ctrl-C")?;
     let stats = central.shutdown().await?;
     eprintln!(
-        "central stopped: {} frames in, {} out, {} bad",
-        stats.counters.frames_in, stats.counters.frames_out, stats.counters.bad_frames
+        "central stopped: {} frames in, {} out, {} bad, {} messages refused by the router's \
+         access control",
+        stats.counters.frames_in,
+        stats.counters.frames_out,
+        stats.counters.bad_frames,
+        stats.refused_by_router
     );
     Ok(ExitCode::SUCCESS)
 }
