@@ -88,7 +88,10 @@ async fn each_identity_is_confined_to_its_own_keys() {
         .unwrap();
 
     let gait = client(&endpoint, "gait", "pg").await;
+    // The spy speaks with one session and listens with another (a session hears its own
+    // publications and tokens locally, without the router).
     let spy = client(&endpoint, "spy", "ps").await;
+    let ears = client(&endpoint, "spy", "ps").await;
     let refused_at_start = acl::refusals(&router).await.unwrap();
 
     // gait: its own keys work both ways.
@@ -117,13 +120,13 @@ async fn each_identity_is_confined_to_its_own_keys() {
     // The spy listens to everything and tries to speak for gait and for central.
     let spied = Seen::default();
     let seen = spied.clone();
-    let _spy_all = spy
+    let _spy_all = ears
         .declare_subscriber("tca/**")
         .callback(move |s| seen.note(&s))
         .await
         .unwrap();
     let seen = spied.clone();
-    let _spy_tokens = spy
+    let _spy_tokens = ears
         .liveliness()
         .declare_subscriber("tca/**")
         .history(true)
@@ -146,6 +149,8 @@ async fn each_identity_is_confined_to_its_own_keys() {
         .await
         .unwrap();
     settle().await;
+    // The tokens the router's session has seen before it declares its own.
+    let tokens = tokens_at_router.keys();
     // Central's token is declared after the spy's attempt: the watcher sees only this one.
     let _central = router
         .liveliness()
@@ -171,10 +176,10 @@ async fn each_identity_is_confined_to_its_own_keys() {
     assert_eq!(from_router.count(&down_key("gait", "g1")), 10);
     // The spy's own key works (so its session is up and publishing).
     assert_eq!(at_router.count(&up_key("spy", "s1")), 10);
-    // It saw nothing of anyone: neither frames nor tokens (not even its own).
+    // It heard nothing of anyone: neither frames nor tokens (not even its own other
+    // session's).
     assert!(spied.keys().is_empty(), "the spy saw {:?}", spied.keys());
     // Its tokens as central or gait never reached the router; its own did.
-    let tokens = tokens_at_router.keys();
     assert!(tokens.contains(&alive_key("gait", "g1")), "{tokens:?}");
     assert!(tokens.contains(&alive_key("spy", "s1")), "{tokens:?}");
     assert!(!tokens.contains(&alive_key("gait", "s1")), "{tokens:?}");
@@ -182,12 +187,12 @@ async fn each_identity_is_confined_to_its_own_keys() {
     // gait sees central's token come once: the spy's never existed at the router.
     assert_eq!(central_seen.count(CENTRAL_ALIVE_KEY), 1, "{:?}", central_seen.keys());
 
-    // The router counted the refusals: 30 frames, 2 subscriptions, 2 tokens at least.
+    // The router counted the refusals: 30 frames, 2 subscriptions and 2 tokens at least.
     let refused = acl::refusals(&router).await.unwrap() - refused_at_start;
     assert!(refused >= 34, "the router counted {refused} refusals");
     eprintln!("refused by the router's access control: {refused}");
 
-    for s in [gait, spy, router] {
+    for s in [gait, spy, ears, router] {
         s.close().await.unwrap();
     }
 }

@@ -48,9 +48,11 @@ async fn start(policy: String, listen: String, log: &Path) -> RunningCentral {
     .unwrap()
 }
 
-/// Everything a plain session sees: samples and liveliness tokens.
+/// A plain zenoh client of one identity: one session speaks, another listens to everything
+/// under `tca` (a session would hear its own publications and tokens locally).
 struct Spy {
     session: zenoh::Session,
+    ears: zenoh::Session,
     seen: Arc<std::sync::Mutex<Vec<String>>>,
     _keep: (
         zenoh::pubsub::Subscriber<()>,
@@ -59,18 +61,19 @@ struct Spy {
 }
 
 impl Spy {
-    /// Opens a plain client session with `config` and listens to everything under `tca`.
+    /// Opens the two sessions with `config`.
     async fn open(config: zenoh::Config) -> Spy {
-        let session = zenoh::open(config).await.unwrap();
+        let session = zenoh::open(config.clone()).await.unwrap();
+        let ears = zenoh::open(config).await.unwrap();
         let seen = Arc::new(std::sync::Mutex::new(Vec::new()));
         let s = seen.clone();
-        let all = session
+        let all = ears
             .declare_subscriber("tca/**")
             .callback(move |sample| s.lock().unwrap().push(sample.key_expr().to_string()))
             .await
             .unwrap();
         let s = seen.clone();
-        let tokens = session
+        let tokens = ears
             .liveliness()
             .declare_subscriber("tca/**")
             .history(true)
@@ -83,6 +86,7 @@ impl Spy {
             .unwrap();
         Spy {
             session,
+            ears,
             seen,
             _keep: (all, tokens),
         }
@@ -158,6 +162,7 @@ async fn check_isolation(
     eprintln!("the spy tried {tried} messages; the router refused {refused}");
     assert!(refused >= tried, "the router refused {refused} of {tried}");
     spy.session.close().await.unwrap();
+    spy.ears.close().await.unwrap();
     asker.close().await;
     echo.close().await;
     let last = central.shutdown().await.unwrap();
