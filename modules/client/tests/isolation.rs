@@ -242,10 +242,7 @@ async fn identities_from_certificates_over_mutual_tls() {
     );
     // The module library says what is missing before it tries.
     match Module::builder("echo").connect(&Connector::zenoh(endpoint.clone())).await {
-        Err(ModuleError::Connect(reason)) => {
-            assert!(reason.contains("TCA_ZENOH_TLS_CERT"), "{reason}")
-        }
-        Err(other) => panic!("expected a connection error, got {other}"),
+        Err(e) => assert!(e.to_string().contains("TCA_ZENOH_TLS_CERT"), "{e}"),
         Ok(_) => panic!("a module without a certificate was admitted"),
     }
     // A certificate's common name is the identity: asker's may not connect as echo.

@@ -314,7 +314,7 @@ fn users_file(dir: &Path) -> std::path::PathBuf {
 }
 
 /// Connects as `identity` logging in to zenoh as that identity.
-fn login(endpoint: &str) -> impl Fn(&str) -> Connector {
+fn login(endpoint: &str) -> impl Fn(&str) -> Connector + use<> {
     let endpoint = endpoint.to_owned();
     move |identity| Connector::zenoh_with_login(&endpoint, identity, format!("zp-{identity}"))
 }
