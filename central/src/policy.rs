@@ -569,7 +569,9 @@ mod tests {
             .authenticate("gait", Some(&creds("gait", "guess")), None)
             .unwrap_err();
         assert!(wrong.contains("unknown or its secret is wrong"), "{wrong}");
-        let unknown = p.authenticate("x", Some(&creds("x", "y")), None).unwrap_err();
+        let unknown = p
+            .authenticate("x", Some(&creds("x", "y")), None)
+            .unwrap_err();
         assert!(unknown.contains("unknown"), "{unknown}");
         let none = p.authenticate("gait", None, None).unwrap_err();
         assert!(none.contains("requires credentials"), "{none}");
@@ -629,9 +631,15 @@ mod tests {
         // No credentials: the login or certificate is the identity, also one without secret.
         let g = p.authenticate("gait", None, Some("gait")).unwrap();
         assert_eq!(g.identity, "gait");
-        assert_eq!(p.authenticate("nav", None, Some("nav")).unwrap().identity, "nav");
+        assert_eq!(
+            p.authenticate("nav", None, Some("nav")).unwrap().identity,
+            "nav"
+        );
         // Credentials must name it, and a secret given must be right.
-        assert!(p.authenticate("gait", Some(&creds("gait", "s3cret")), Some("gait")).is_ok());
+        assert!(
+            p.authenticate("gait", Some(&creds("gait", "s3cret")), Some("gait"))
+                .is_ok()
+        );
         let e = p
             .authenticate("gait", Some(&creds("gait", "guess")), Some("gait"))
             .unwrap_err();
@@ -642,7 +650,9 @@ mod tests {
         assert!(e.contains("authenticated as identity \"gait\""), "{e}");
         // Its module rule still applies; an identity without secret cannot log in by hello.
         assert!(p.authenticate("ltm", None, Some("gait")).is_err());
-        let e = p.authenticate("nav", Some(&creds("nav", "")), None).unwrap_err();
+        let e = p
+            .authenticate("nav", Some(&creds("nav", "")), None)
+            .unwrap_err();
         assert!(e.contains("unknown or its secret is wrong"), "{e}");
         assert!(p.authenticate("x", None, Some("stranger")).is_err());
     }

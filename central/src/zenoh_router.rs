@@ -100,7 +100,11 @@ impl ZenohCentral {
 
         // One subscriber per identity, so that each session learns only of its own.
         let patterns = if isolating {
-            security.identities.iter().map(|n| up_key_pattern(n)).collect()
+            security
+                .identities
+                .iter()
+                .map(|n| up_key_pattern(n))
+                .collect()
         } else {
             vec![UP_KEY_PATTERN.to_owned()]
         };

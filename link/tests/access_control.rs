@@ -34,7 +34,12 @@ impl Seen {
             .push((sample.key_expr().to_string(), sample.kind()));
     }
     fn keys(&self) -> Vec<String> {
-        self.0.lock().unwrap().iter().map(|(k, _)| k.clone()).collect()
+        self.0
+            .lock()
+            .unwrap()
+            .iter()
+            .map(|(k, _)| k.clone())
+            .collect()
     }
     fn count(&self, key: &str) -> usize {
         self.keys().iter().filter(|k| *k == key).count()
@@ -171,7 +176,12 @@ async fn each_identity_is_confined_to_its_own_keys() {
 
     // gait's frames reach the router, and only gait's own 10 on its key; the router's reach
     // gait, and only the router's.
-    assert_eq!(at_router.count(&up_key("gait", "g1")), 10, "{:?}", at_router.keys());
+    assert_eq!(
+        at_router.count(&up_key("gait", "g1")),
+        10,
+        "{:?}",
+        at_router.keys()
+    );
     assert_eq!(at_router.count(&up_key("gait", "s1")), 0);
     assert_eq!(from_router.count(&down_key("gait", "g1")), 10);
     // The spy's own key works (so its session is up and publishing).
@@ -183,9 +193,17 @@ async fn each_identity_is_confined_to_its_own_keys() {
     assert!(tokens.contains(&alive_key("gait", "g1")), "{tokens:?}");
     assert!(tokens.contains(&alive_key("spy", "s1")), "{tokens:?}");
     assert!(!tokens.contains(&alive_key("gait", "s1")), "{tokens:?}");
-    assert!(!tokens.contains(&CENTRAL_ALIVE_KEY.to_owned()), "{tokens:?}");
+    assert!(
+        !tokens.contains(&CENTRAL_ALIVE_KEY.to_owned()),
+        "{tokens:?}"
+    );
     // gait sees central's token come once: the spy's never existed at the router.
-    assert_eq!(central_seen.count(CENTRAL_ALIVE_KEY), 1, "{:?}", central_seen.keys());
+    assert_eq!(
+        central_seen.count(CENTRAL_ALIVE_KEY),
+        1,
+        "{:?}",
+        central_seen.keys()
+    );
 
     // The router counted the refusals: 30 frames, 2 subscriptions and 2 tokens at least.
     let refused = acl::refusals(&router).await.unwrap() - refused_at_start;
@@ -215,6 +233,9 @@ async fn a_user_outside_the_dictionary_cannot_open_a_session() {
     assert!(zenoh::open(config).await.is_err(), "no login was admitted");
     let wrong = ZenohLogin::new("gait", "guess");
     let config = client_config_with_login(&[endpoint], Some(&wrong)).unwrap();
-    assert!(zenoh::open(config).await.is_err(), "a wrong password was admitted");
+    assert!(
+        zenoh::open(config).await.is_err(),
+        "a wrong password was admitted"
+    );
     router.close().await.unwrap();
 }

@@ -23,7 +23,7 @@
 use serde_json::{Value, json};
 
 use super::keys::{
-    CENTRAL_ALIVE_KEY, alive_key_pattern, down_key_pattern, check_identity_name, up_key_pattern,
+    CENTRAL_ALIVE_KEY, alive_key_pattern, check_identity_name, down_key_pattern, up_key_pattern,
 };
 use crate::{LinkError, Result};
 

@@ -39,7 +39,7 @@ pub use config::{
 pub use exposure::{Exposure, exposure};
 pub use keys::{
     ALIVE_KEY_PATTERN, CENTRAL_ALIVE_KEY, DEFAULT_ENDPOINT, NO_IDENTITY, RETRY_PERIOD_INIT_MS,
-    RETRY_PERIOD_MAX_MS, UP_KEY_PATTERN, alive_key, check_identity_name, down_key, link_of,
-    up_key, up_key_pattern,
+    RETRY_PERIOD_MAX_MS, UP_KEY_PATTERN, alive_key, check_identity_name, down_key, link_of, up_key,
+    up_key_pattern,
 };
 pub use tls::TlsFiles;

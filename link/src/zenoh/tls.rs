@@ -111,7 +111,10 @@ impl TlsFiles {
 
 fn read(what: &str, path: &Path) -> Result<String> {
     std::fs::read_to_string(path).map_err(|e| {
-        LinkError::Config(format!("cannot read the TLS {what} {}: {e}", path.display()))
+        LinkError::Config(format!(
+            "cannot read the TLS {what} {}: {e}",
+            path.display()
+        ))
     })
 }
 

@@ -14,10 +14,10 @@ use std::time::Duration;
 use common::{free_endpoint, within};
 use serde::{Deserialize, Serialize};
 use tca_central::{CentralConfig, Policy, RunningCentral, StartOptions};
+use tca_link::ZenohTransport;
 use tca_link::zenoh::{
     CENTRAL_ALIVE_KEY, TlsFiles, ZenohLogin, alive_key, client_config_secured, down_key, up_key,
 };
-use tca_link::ZenohTransport;
 use tca_logs::{LinkEvent, RecordKind};
 use tca_module::{Connector, Module, ModuleError};
 use tca_testkit::TestCa;
@@ -54,10 +54,7 @@ struct Spy {
     session: zenoh::Session,
     ears: zenoh::Session,
     seen: Arc<std::sync::Mutex<Vec<String>>>,
-    _keep: (
-        zenoh::pubsub::Subscriber<()>,
-        zenoh::pubsub::Subscriber<()>,
-    ),
+    _keep: (zenoh::pubsub::Subscriber<()>, zenoh::pubsub::Subscriber<()>),
 }
 
 impl Spy {
@@ -151,12 +148,20 @@ async fn check_isolation(
     let (tried, _tokens) = spy.speak_for_others(20).await;
     // The modules go on undisturbed.
     for n in 0..5 {
-        assert_eq!(within("echo after", asker.query(&Echo(n))).await.unwrap(), n);
+        assert_eq!(
+            within("echo after", asker.query(&Echo(n))).await.unwrap(),
+            n
+        );
     }
     tokio::time::sleep(Duration::from_millis(300)).await;
     let after = central.handle().stats().await.unwrap();
     let seen = spy.seen();
-    assert!(seen.is_empty(), "the spy saw {} samples: {:?}", seen.len(), &seen[..seen.len().min(5)]);
+    assert!(
+        seen.is_empty(),
+        "the spy saw {} samples: {:?}",
+        seen.len(),
+        &seen[..seen.len().min(5)]
+    );
     assert_eq!(after.counters.bad_frames, before.counters.bad_frames);
     let refused = after.refused_by_router - before.refused_by_router;
     eprintln!("the spy tried {tried} messages; the router refused {refused}");
@@ -196,10 +201,11 @@ async fn a_logged_in_session_reads_and_speaks_only_for_itself() {
     let log = dir.path().join("traffic.mcap");
     let central = start(policy, endpoint.clone(), &log).await;
     let spy_login = ZenohLogin::new("spy", "zp-spy");
-    let spy = Spy::open(client_config_secured(&[endpoint.clone()], Some(&spy_login), None).unwrap()).await;
-    let connector_for = |identity: &str| {
-        Connector::zenoh_with_login(&endpoint, identity, format!("zp-{identity}"))
-    };
+    let spy =
+        Spy::open(client_config_secured(&[endpoint.clone()], Some(&spy_login), None).unwrap())
+            .await;
+    let connector_for =
+        |identity: &str| Connector::zenoh_with_login(&endpoint, identity, format!("zp-{identity}"));
     check_isolation(central, &log, connector_for, spy, 0).await;
 }
 
@@ -241,12 +247,16 @@ async fn identities_from_certificates_over_mutual_tls() {
         "a session without a certificate opened"
     );
     // The module library says what is missing before it tries.
-    match Module::builder("echo").connect(&Connector::zenoh(endpoint.clone())).await {
+    match Module::builder("echo")
+        .connect(&Connector::zenoh(endpoint.clone()))
+        .await
+    {
         Err(e) => assert!(e.to_string().contains("TCA_ZENOH_TLS_CERT"), "{e}"),
         Ok(_) => panic!("a module without a certificate was admitted"),
     }
     // A certificate's common name is the identity: asker's may not connect as echo.
-    let as_asker = Connector::from(ZenohTransport::new(vec![endpoint.clone()]).tls(ca.module("asker")));
+    let as_asker =
+        Connector::from(ZenohTransport::new(vec![endpoint.clone()]).tls(ca.module("asker")));
     match within("asker as echo", Module::builder("echo").connect(&as_asker)).await {
         Err(ModuleError::Refused { reason, .. }) => assert!(
             reason.contains("identity \"asker\" may not connect as module \"echo\""),
@@ -257,11 +267,15 @@ async fn identities_from_certificates_over_mutual_tls() {
     }
 
     let spy_files = ca.module("spy");
-    let spy = Spy::open(client_config_secured(&[endpoint.clone()], None, Some(&spy_files)).unwrap()).await;
+    let spy =
+        Spy::open(client_config_secured(&[endpoint.clone()], None, Some(&spy_files)).unwrap())
+            .await;
     let identities: std::collections::HashMap<&str, TlsFiles> =
         [("echo", ca.module("echo")), ("asker", ca.module("asker"))].into();
     let connector_for = |identity: &str| {
-        Connector::from(ZenohTransport::new(vec![endpoint.clone()]).tls(identities[identity].clone()))
+        Connector::from(
+            ZenohTransport::new(vec![endpoint.clone()]).tls(identities[identity].clone()),
+        )
     };
     // The refused module above opened one link of its own, and was refused on it.
     check_isolation(central, &log, connector_for, spy, 2).await;

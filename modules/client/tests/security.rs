@@ -87,10 +87,7 @@ async fn start(config: CentralConfig, zenoh: bool, log: Option<&Path>) -> (Runni
 }
 
 /// The echo module, with a counter of the map updates it received.
-async fn echo(
-    connect: &Connect,
-    secret: &str,
-) -> Result<(Module, Arc<AtomicU64>), ModuleError> {
+async fn echo(connect: &Connect, secret: &str) -> Result<(Module, Arc<AtomicU64>), ModuleError> {
     let maps = Arc::new(AtomicU64::new(0));
     let seen = maps.clone();
     let module = Module::builder("echo")

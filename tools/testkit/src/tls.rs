@@ -68,7 +68,9 @@ impl TestCa {
         ];
         params.extended_key_usages = vec![usage];
         let key = KeyPair::generate().expect("a key pair");
-        let cert = params.signed_by(&key, &self.issuer).expect("a signed certificate");
+        let cert = params
+            .signed_by(&key, &self.issuer)
+            .expect("a signed certificate");
         let certificate = self.dir.join(format!("{cn}.pem"));
         let private_key = self.dir.join(format!("{cn}.key"));
         std::fs::write(&certificate, cert.pem()).expect("write a certificate");
