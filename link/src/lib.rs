@@ -25,7 +25,9 @@
 //!   module's side), [`LocalListener`] (central's side), [`LocalEndpoint`], [`PeerPolicy`].
 //! - [`net`]: free loopback ports and endpoints.
 //! - [`zenoh`](mod@zenoh): the zenoh key scheme and liveliness tokens, router and client
-//!   configuration, the zenoh login, and [`ZenohTransport`], a module's client side.
+//!   configuration, the zenoh login, mutual TLS ([`TlsFiles`]), the router's access control
+//!   that confines each identity to its own keys, and [`ZenohTransport`], a module's client
+//!   side.
 //! - [`error`](mod@error): [`LinkError`].
 
 pub mod error;

@@ -67,9 +67,10 @@ async fn each_identity_is_confined_to_its_own_keys() {
         tls: None,
         identities: vec!["gait".into(), "spy".into()],
     };
-    let router = zenoh::open(router_config_secured(&[endpoint.clone()], &security).unwrap())
-        .await
-        .unwrap();
+    let router =
+        zenoh::open(router_config_secured(std::slice::from_ref(&endpoint), &security).unwrap())
+            .await
+            .unwrap();
     // The router's session listens as central does: per identity, and to every token.
     let at_router = Seen::default();
     let mut subscribers = Vec::new();
@@ -226,10 +227,11 @@ async fn a_user_outside_the_dictionary_cannot_open_a_session() {
         tls: None,
         identities: vec!["gait".into()],
     };
-    let router = zenoh::open(router_config_secured(&[endpoint.clone()], &security).unwrap())
-        .await
-        .unwrap();
-    let config = tca_link::zenoh::client_config(&[endpoint.clone()]).unwrap();
+    let router =
+        zenoh::open(router_config_secured(std::slice::from_ref(&endpoint), &security).unwrap())
+            .await
+            .unwrap();
+    let config = tca_link::zenoh::client_config(std::slice::from_ref(&endpoint)).unwrap();
     assert!(zenoh::open(config).await.is_err(), "no login was admitted");
     let wrong = ZenohLogin::new("gait", "guess");
     let config = client_config_with_login(&[endpoint], Some(&wrong)).unwrap();

@@ -45,7 +45,7 @@ impl TlsFiles {
     /// The files named by `TCA_ZENOH_TLS_CERT`, `TCA_ZENOH_TLS_KEY` and `TCA_ZENOH_TLS_CA`:
     /// none when none is set, an error naming the missing ones when only some are.
     pub fn from_env() -> Result<Option<Self>> {
-        let vars = [ENV_CERTIFICATE, ENV_PRIVATE_KEY, ENV_CA].map(|v| std::env::var_os(v));
+        let vars = [ENV_CERTIFICATE, ENV_PRIVATE_KEY, ENV_CA].map(std::env::var_os);
         let missing: Vec<&str> = [ENV_CERTIFICATE, ENV_PRIVATE_KEY, ENV_CA]
             .iter()
             .zip(&vars)

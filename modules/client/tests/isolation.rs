@@ -14,7 +14,6 @@ use std::time::Duration;
 use common::{free_endpoint, within};
 use serde::{Deserialize, Serialize};
 use tca_central::{CentralConfig, Policy, RunningCentral, StartOptions};
-use tca_link::ZenohTransport;
 use tca_link::zenoh::{
     CENTRAL_ALIVE_KEY, TlsFiles, ZenohLogin, alive_key, client_config_secured, down_key, up_key,
 };
@@ -201,9 +200,10 @@ async fn a_logged_in_session_reads_and_speaks_only_for_itself() {
     let log = dir.path().join("traffic.mcap");
     let central = start(policy, endpoint.clone(), &log).await;
     let spy_login = ZenohLogin::new("spy", "zp-spy");
-    let spy =
-        Spy::open(client_config_secured(&[endpoint.clone()], Some(&spy_login), None).unwrap())
-            .await;
+    let spy = Spy::open(
+        client_config_secured(std::slice::from_ref(&endpoint), Some(&spy_login), None).unwrap(),
+    )
+    .await;
     let connector_for =
         |identity: &str| Connector::zenoh_with_login(&endpoint, identity, format!("zp-{identity}"));
     check_isolation(central, &log, connector_for, spy, 0).await;
@@ -230,12 +230,14 @@ async fn identities_from_certificates_over_mutual_tls() {
     std::fs::create_dir(&rogue_dir).unwrap();
     let rogue = TestCa::new(&rogue_dir, "rogue").module("echo");
     let forged = TlsFiles::new(&rogue.certificate, &rogue.private_key, ca.ca());
-    let config = client_config_secured(&[endpoint.clone()], None, Some(&forged)).unwrap();
+    let config =
+        client_config_secured(std::slice::from_ref(&endpoint), None, Some(&forged)).unwrap();
     assert!(
         zenoh::open(config).await.is_err(),
         "a certificate of another CA opened a session"
     );
-    let mut no_certificate = tca_link::zenoh::client_config(&[endpoint.clone()]).unwrap();
+    let mut no_certificate =
+        tca_link::zenoh::client_config(std::slice::from_ref(&endpoint)).unwrap();
     no_certificate
         .insert_json5(
             "transport/link/tls/root_ca_certificate",
@@ -255,8 +257,7 @@ async fn identities_from_certificates_over_mutual_tls() {
         Ok(_) => panic!("a module without a certificate was admitted"),
     }
     // A certificate's common name is the identity: asker's may not connect as echo.
-    let as_asker =
-        Connector::from(ZenohTransport::new(vec![endpoint.clone()]).tls(ca.module("asker")));
+    let as_asker = Connector::zenoh_with_tls(&endpoint, ca.module("asker"));
     match within("asker as echo", Module::builder("echo").connect(&as_asker)).await {
         Err(ModuleError::Refused { reason, .. }) => assert!(
             reason.contains("identity \"asker\" may not connect as module \"echo\""),
@@ -267,16 +268,14 @@ async fn identities_from_certificates_over_mutual_tls() {
     }
 
     let spy_files = ca.module("spy");
-    let spy =
-        Spy::open(client_config_secured(&[endpoint.clone()], None, Some(&spy_files)).unwrap())
-            .await;
+    let spy = Spy::open(
+        client_config_secured(std::slice::from_ref(&endpoint), None, Some(&spy_files)).unwrap(),
+    )
+    .await;
     let identities: std::collections::HashMap<&str, TlsFiles> =
         [("echo", ca.module("echo")), ("asker", ca.module("asker"))].into();
-    let connector_for = |identity: &str| {
-        Connector::from(
-            ZenohTransport::new(vec![endpoint.clone()]).tls(identities[identity].clone()),
-        )
-    };
+    let connector_for =
+        |identity: &str| Connector::zenoh_with_tls(&endpoint, identities[identity].clone());
     // The refused module above opened one link of its own, and was refused on it.
     check_isolation(central, &log, connector_for, spy, 2).await;
 }
