@@ -52,6 +52,22 @@ async fn client(endpoint: &str, user: &str, password: &str) -> zenoh::Session {
     zenoh::open(config).await.unwrap()
 }
 
+/// A router configured as central's, with these logins (each user an identity), and its
+/// endpoint.
+async fn router(dir: &std::path::Path, logins: &[(&str, &str)]) -> (zenoh::Session, String) {
+    let users = dir.join("users.txt");
+    let text: String = logins.iter().map(|(u, p)| format!("{u}:{p}\n")).collect();
+    std::fs::write(&users, text).unwrap();
+    let endpoint = free_endpoint();
+    let security = RouterSecurity {
+        users_file: Some(users),
+        tls: None,
+        identities: logins.iter().map(|(u, _)| u.to_string()).collect(),
+    };
+    let config = router_config_secured(std::slice::from_ref(&endpoint), &security).unwrap();
+    (zenoh::open(config).await.unwrap(), endpoint)
+}
+
 async fn settle() {
     tokio::time::sleep(Duration::from_millis(300)).await;
 }
@@ -59,18 +75,7 @@ async fn settle() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn each_identity_is_confined_to_its_own_keys() {
     let dir = tempfile::tempdir().unwrap();
-    let users = dir.path().join("users.txt");
-    std::fs::write(&users, "gait:pg\nspy:ps\n").unwrap();
-    let endpoint = free_endpoint();
-    let security = RouterSecurity {
-        users_file: Some(users),
-        tls: None,
-        identities: vec!["gait".into(), "spy".into()],
-    };
-    let router =
-        zenoh::open(router_config_secured(std::slice::from_ref(&endpoint), &security).unwrap())
-            .await
-            .unwrap();
+    let (router, endpoint) = router(dir.path(), &[("gait", "pg"), ("spy", "ps")]).await;
     // The router's session listens as central does: per identity, and to every token.
     let at_router = Seen::default();
     let mut subscribers = Vec::new();
@@ -219,18 +224,7 @@ async fn each_identity_is_confined_to_its_own_keys() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_user_outside_the_dictionary_cannot_open_a_session() {
     let dir = tempfile::tempdir().unwrap();
-    let users = dir.path().join("users.txt");
-    std::fs::write(&users, "gait:pg\n").unwrap();
-    let endpoint = free_endpoint();
-    let security = RouterSecurity {
-        users_file: Some(users),
-        tls: None,
-        identities: vec!["gait".into()],
-    };
-    let router =
-        zenoh::open(router_config_secured(std::slice::from_ref(&endpoint), &security).unwrap())
-            .await
-            .unwrap();
+    let (router, endpoint) = router(dir.path(), &[("gait", "pg")]).await;
     let config = tca_link::zenoh::client_config(std::slice::from_ref(&endpoint)).unwrap();
     assert!(zenoh::open(config).await.is_err(), "no login was admitted");
     let wrong = ZenohLogin::new("gait", "guess");

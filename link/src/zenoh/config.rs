@@ -22,6 +22,20 @@ fn set_string(config: &mut zenoh::Config, key: &str, value: &str) -> Result<()> 
     set(config, key, &json)
 }
 
+/// Mutual TLS with `tls`'s files, as the `side` (`listen` or `connect`) of links.
+fn set_tls(config: &mut zenoh::Config, tls: &TlsFiles, side: &str) -> Result<()> {
+    tls.check()?;
+    let path = |p: &Path| p.to_string_lossy().into_owned();
+    for (key, value) in [
+        (format!("{side}_certificate"), path(&tls.certificate)),
+        (format!("{side}_private_key"), path(&tls.private_key)),
+        ("root_ca_certificate".to_owned(), path(&tls.ca)),
+    ] {
+        set_string(config, &format!("transport/link/tls/{key}"), &value)?;
+    }
+    set(config, "transport/link/tls/enable_mtls", "true")
+}
+
 fn endpoints_json(endpoints: &[String]) -> Result<String> {
     for e in endpoints {
         if !e.contains('/') {
@@ -92,18 +106,7 @@ pub fn router_config_secured(
         )?;
     }
     match &security.tls {
-        Some(tls) => {
-            tls.check()?;
-            let path = |p: &Path| p.to_string_lossy().into_owned();
-            for (key, value) in [
-                ("listen_certificate", path(&tls.certificate)),
-                ("listen_private_key", path(&tls.private_key)),
-                ("root_ca_certificate", path(&tls.ca)),
-            ] {
-                set_string(&mut config, &format!("transport/link/tls/{key}"), &value)?;
-            }
-            set(&mut config, "transport/link/tls/enable_mtls", "true")?;
-        }
+        Some(tls) => set_tls(&mut config, tls, "listen")?,
         None => {
             if let Some(e) = listen.iter().find(|e| is_tls(e)) {
                 return Err(LinkError::Config(format!(
@@ -228,18 +231,7 @@ pub fn client_config_secured(
         )?;
     }
     match tls {
-        Some(tls) => {
-            tls.check()?;
-            let path = |p: &Path| p.to_string_lossy().into_owned();
-            for (key, value) in [
-                ("connect_certificate", path(&tls.certificate)),
-                ("connect_private_key", path(&tls.private_key)),
-                ("root_ca_certificate", path(&tls.ca)),
-            ] {
-                set_string(&mut config, &format!("transport/link/tls/{key}"), &value)?;
-            }
-            set(&mut config, "transport/link/tls/enable_mtls", "true")?;
-        }
+        Some(tls) => set_tls(&mut config, tls, "connect")?,
         None => {
             if let Some(e) = connect.iter().find(|e| is_tls(e)) {
                 return Err(LinkError::Config(format!(
