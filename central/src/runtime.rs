@@ -279,8 +279,11 @@ pub struct StartOptions {
     /// `tcp/127.0.0.1:7447`), any mix of them.
     pub listen: Vec<String>,
     /// Listen on endpoints other machines can reach (`tcp/0.0.0.0:7447`, a LAN address, a
-    /// host name) without a policy. Off (the default), [`start`] refuses that with
-    /// [`CentralError::Insecure`]: an open central admits any process that finds it.
+    /// host name) without a policy, or with a policy that authenticates no zenoh client (no
+    /// `zenoh_users_file`, no `[transport.tls]`). Off (the default), [`start`] refuses the
+    /// first with [`CentralError::Insecure`] (an open central admits any process that finds
+    /// it) and the second with [`CentralError::Unisolated`] (its router cannot keep modules
+    /// from reading and speaking for each other).
     pub insecure: bool,
 }
 
@@ -324,11 +327,30 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
         .listen
         .iter()
         .partition(|e| LocalEndpoint::is_local(e));
-    if options.config.policy.is_none() && !options.insecure {
-        for e in &zenoh_endpoints {
-            if let tca_link::zenoh::Exposure::Network(reason) = tca_link::zenoh::exposure(e) {
+    let security = options
+        .config
+        .policy
+        .as_ref()
+        .map(|p| p.router_security())
+        .unwrap_or_default();
+    for e in &zenoh_endpoints {
+        let tca_link::zenoh::Exposure::Network(reason) = tca_link::zenoh::exposure(e) else {
+            continue;
+        };
+        if options.config.policy.is_none() {
+            if !options.insecure {
                 return Err(CentralError::Insecure(reason));
             }
+        } else if !security.authenticators().any() {
+            if !options.insecure {
+                return Err(CentralError::Unisolated(reason));
+            }
+            tracing::warn!(
+                endpoint = %e,
+                "the policy authenticates no zenoh client (no zenoh_users_file, no \
+                 [transport.tls]): any client that reaches this endpoint can read every \
+                 module's frames and publish on their keys (--insecure)"
+            );
         }
     }
     let mut local = Vec::new();
@@ -348,25 +370,7 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
     let zenoh = if zenoh_endpoints.is_empty() {
         None
     } else {
-        let security = options
-            .config
-            .policy
-            .as_ref()
-            .map(|p| p.router_security())
-            .unwrap_or_default();
         let endpoints: Vec<String> = zenoh_endpoints.into_iter().cloned().collect();
-        if options.config.policy.is_some() && !security.authenticators().any() {
-            for e in &endpoints {
-                if let tca_link::zenoh::Exposure::Network(_) = tca_link::zenoh::exposure(e) {
-                    tracing::warn!(
-                        endpoint = %e,
-                        "the policy authenticates no zenoh client (no zenoh_users_file, no \
-                         [transport.tls]): any client that reaches this endpoint can read every \
-                         module's frames and publish on their keys"
-                    );
-                }
-            }
-        }
         let zenoh = ZenohCentral::start(&endpoints, &security, handle.clone()).await?;
         if security.authenticators().any() {
             let _ = handle.router.set(zenoh.session().clone());

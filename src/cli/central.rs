@@ -64,7 +64,9 @@ pub(crate) struct CentralArgs {
     #[arg(long, default_value_t = CentralConfig::default().max_log_backlog)]
     max_log_backlog: u32,
     /// Listen on endpoints other machines can reach (tcp/0.0.0.0:7447, a LAN address) with
-    /// no --policy. Without it central refuses to: an open central admits anyone who finds it.
+    /// no --policy, or with a policy that authenticates no zenoh client (no zenoh users file,
+    /// no TLS). Without it central refuses to: an open central admits anyone who finds it, and
+    /// a router that cannot tell clients apart lets each read and speak for the others.
     #[arg(long)]
     insecure: bool,
     /// Keep the system's simulated clock: release messages in simulated-time order (for

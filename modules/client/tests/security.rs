@@ -393,6 +393,17 @@ fn policy_example_file_parses() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../policy.example.toml");
     let policy = Policy::load(&path).unwrap();
     assert!(policy.zenoh_users_file().is_some());
+    // Its zenoh users are its identities, so the router takes it, with access control on.
+    let security = policy.router_security();
+    assert!(security.authenticators().users);
+    let config =
+        tca_link::zenoh::router_config_secured(&["tcp/127.0.0.1:7447".into()], &security).unwrap();
+    assert!(
+        config
+            .get_json("access_control/enabled")
+            .unwrap()
+            .contains("true")
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
