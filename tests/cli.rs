@@ -308,7 +308,7 @@ async fn ping_over_mutual_tls_with_certificates_from_the_environment() {
         policy.to_str().unwrap(),
     ]);
     let ping = |files: Option<tca_link::zenoh::TlsFiles>| {
-        let mut command = tca().command(&["ping", "--connect", &endpoint, "-n", "50"]);
+        let mut command = common::tca().command(&["ping", "--connect", &endpoint, "-n", "50"]);
         if let Some(f) = files {
             command
                 .env("TCA_ZENOH_TLS_CERT", &f.certificate)
