@@ -1,5 +1,5 @@
-//! The `tca` command itself: ping (in-process and over zenoh), `tca up` with a launch file,
-//! registry and tree over zenoh, log show, and its errors.
+//! The `tca` command itself: ping (in-process, over zenoh, over mutual TLS), `tca up` with a
+//! launch file, registry and tree over zenoh, log show, and its errors.
 
 mod common;
 
@@ -272,6 +272,88 @@ async fn a_zenoh_unix_socket_central_works_with_no_warnings() {
     for bad in ["WARN", "ERROR", "warning"] {
         assert!(!err.contains(bad), "{bad} in central's stderr:\n{err}");
     }
+}
+
+/// `tca central --listen tls/...` with `[transport.tls]` in its policy, and `tca ping` over it
+/// with the certificate of `TCA_ZENOH_TLS_*`: a certificate signed by central's CA connects,
+/// as the identity its common name names; none, or one of another CA, does not.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn ping_over_mutual_tls_with_certificates_from_the_environment() {
+    let dir = tempfile::tempdir().unwrap();
+    let ca = tca_testkit::TestCa::new(dir.path(), "tca");
+    let central_files = ca.central();
+    let tools = ca.module("tools");
+    let rogue_dir = dir.path().join("rogue");
+    std::fs::create_dir(&rogue_dir).unwrap();
+    let rogue = tca_testkit::TestCa::new(&rogue_dir, "rogue").module("tools");
+    let policy = dir.path().join("policy.toml");
+    std::fs::write(
+        &policy,
+        format!(
+            "[transport.tls]\ncertificate = {:?}\nprivate_key = {:?}\nca = {:?}\n\
+             [[identity]]\nname = \"tools\"\nmodules = [\"*\"]\nregister = [\"*\"]\n\
+             send = [\"*\"]\n",
+            central_files.certificate.display().to_string(),
+            central_files.private_key.display().to_string(),
+            central_files.ca.display().to_string(),
+        ),
+    )
+    .unwrap();
+    let endpoint = format!("tls/127.0.0.1:{}", free_port());
+    let _central = spawn_tca(&[
+        "central",
+        "--listen",
+        &endpoint,
+        "--policy",
+        policy.to_str().unwrap(),
+    ]);
+    let ping = |files: Option<tca_link::zenoh::TlsFiles>| {
+        let mut command = common::tca().command(&["ping", "--connect", &endpoint, "-n", "50"]);
+        if let Some(f) = files {
+            command
+                .env("TCA_ZENOH_TLS_CERT", &f.certificate)
+                .env("TCA_ZENOH_TLS_KEY", &f.private_key)
+                .env("TCA_ZENOH_TLS_CA", &f.ca);
+        }
+        async move {
+            let out = tokio::task::spawn_blocking(move || command.output())
+                .await
+                .unwrap()
+                .unwrap();
+            (out.status.success(), stdout(&out), stderr(&out))
+        }
+    };
+    let (_, out, _) = retry("a ping over TLS", || {
+        let run = ping(Some(tools.clone()));
+        async move {
+            let (ok, out, err) = run.await;
+            if ok { Ok((ok, out, err)) } else { Err(err) }
+        }
+    })
+    .await;
+    assert!(out.contains("50 query round trips"), "{out}");
+
+    let (ok, _, err) = ping(None).await;
+    assert!(!ok, "a ping without a certificate succeeded");
+    assert!(err.contains("TCA_ZENOH_TLS_CERT"), "{err}");
+    let forged = tca_link::zenoh::TlsFiles::new(&rogue.certificate, &rogue.private_key, ca.ca());
+    let (ok, _, err) = ping(Some(forged)).await;
+    assert!(!ok, "a ping with a certificate of another CA succeeded");
+    assert!(err.contains("no central at"), "{err}");
+
+    // TLS endpoints need TLS files in the policy.
+    let plain = dir.path().join("plain.toml");
+    std::fs::write(&plain, "[[identity]]\nname = \"tools\"\n").unwrap();
+    let other = format!("tls/127.0.0.1:{}", free_port());
+    let out = tca(&[
+        "central",
+        "--listen",
+        &other,
+        "--policy",
+        plain.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("[transport.tls]"), "{}", stderr(&out));
 }
 
 #[test]

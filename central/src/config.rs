@@ -41,8 +41,9 @@ use crate::policy::Policy;
 /// `policy` (loaded from a TOML file with [`Policy::load`], `tca central --policy FILE`)
 /// makes central check every hello against the policy's identities (identity + secret,
 /// secrets stored as salted SHA3-256 hashes) and every registration and send against the
-/// identity's `register` and `send` globs; its `[transport] zenoh_users_file` also makes the
-/// zenoh router require zenoh user/password authentication. See [`crate::policy`] for the
+/// identity's `register` and `send` globs; its `[transport] zenoh_users_file` and
+/// `[transport.tls]` also make the zenoh router authenticate clients (zenoh login, client
+/// certificates) and confine each identity to its own keys. See [`crate::policy`] for the
 /// file format. Without a policy, central admits every module, as before.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]

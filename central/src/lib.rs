@@ -59,6 +59,18 @@ pub enum CentralError {
          --insecure"
     )]
     Insecure(String),
+    /// Central was asked to listen where other machines can reach it with a policy that
+    /// authenticates no zenoh client, so its router cannot keep the modules apart.
+    #[error(
+        "refusing to listen on {0} (reachable from other machines) with a policy that \
+         authenticates no zenoh client: the router cannot tell clients apart, so any process \
+         that reaches it could read every module's frames and publish on their keys. Add \
+         `zenoh_users_file` or `[transport.tls]` to the policy's [transport] section (see \
+         policy.example.toml and the README's security section), listen on a loopback address \
+         (tcp/127.0.0.1:7447) or a local socket (local), or, on a network you trust, say \
+         --insecure"
+    )]
+    Unisolated(String),
     /// The policy file could not be loaded.
     #[error(transparent)]
     Policy(#[from] PolicyError),

@@ -6,7 +6,15 @@
 //! [transport]
 //! # Optional: zenoh user/password dictionary (`user:password` per line). With it, central's
 //! # zenoh router refuses every zenoh client that does not log in with one of these pairs.
+//! # Each user is an identity below.
 //! zenoh_users_file = "zenoh-users.txt"
+//!
+//! # Optional: mutual TLS on `tls/` endpoints. A module's certificate must be signed by `ca`;
+//! # its common name is its identity.
+//! [transport.tls]
+//! certificate = "central.pem"
+//! private_key = "central.key"
+//! ca = "ca.pem"
 //!
 //! # Optional: what modules that present no credentials may do. Without this section they are
 //! # refused at hello.
@@ -17,12 +25,20 @@
 //! [[identity]]
 //! name = "gait"
 //! # hex SHA3-256 of "tca-identity:<name>:<secret>"; print it with
-//! # `cargo run -p tca-central --example hash_secret -- gait` (reads the secret on stdin)
+//! # `cargo run -p tca-central --example hash_secret -- gait` (reads the secret on stdin).
+//! # Optional: without it the identity connects only as proven by its zenoh user or
+//! # certificate.
 //! secret_sha3 = "…64 hex digits…"
 //! modules = ["gait"]            # module names it may connect as (globs); default [name]
 //! register = ["planStep"]       # message names it may register (globs)
 //! send = ["ltm*", "moveArm"]    # message names it may send (globs)
 //! ```
+//!
+//! Identity names are ASCII letters, digits, `-`, `_` and `.`: they name the identity's zenoh
+//! keys, its zenoh user and its certificate's common name. When the policy authenticates zenoh
+//! clients (a users file, TLS), central's router confines each identity to its own keys
+//! ([`tca_link::zenoh::acl`]), and a link's identity is the one its login or certificate
+//! proved: its hello may omit credentials, and may not name another identity.
 //!
 //! Globs: `*` matches any run of characters (also none), `?` exactly one. Control messages:
 //! `tca.hello`, `tca.helloAuth`, `tca.register` (each entry is checked against `register`),
@@ -37,6 +53,7 @@ use std::sync::Arc;
 
 use serde::Deserialize;
 use sha3::{Digest, Sha3_256};
+use tca_link::zenoh::{RouterSecurity, TlsFiles, check_identity_name};
 use tca_messages::control::{ControlKind, Credentials};
 
 /// Errors loading a policy file.
@@ -86,6 +103,15 @@ struct PolicyFile {
 #[serde(deny_unknown_fields)]
 struct TransportSection {
     zenoh_users_file: Option<PathBuf>,
+    tls: Option<TlsSection>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TlsSection {
+    certificate: PathBuf,
+    private_key: PathBuf,
+    ca: PathBuf,
 }
 
 #[derive(Debug, Deserialize)]
@@ -101,7 +127,7 @@ struct PermissionsFile {
 #[serde(deny_unknown_fields)]
 struct IdentityFile {
     name: String,
-    secret_sha3: String,
+    secret_sha3: Option<String>,
     modules: Option<Vec<String>>,
     #[serde(default)]
     register: Vec<String>,
@@ -126,7 +152,8 @@ pub struct Permissions {
 #[derive(Clone, PartialEq, Eq)]
 struct Identity {
     name: String,
-    secret_hash: [u8; 32],
+    /// None: it can only be admitted on a link whose transport authenticated it.
+    secret_hash: Option<[u8; 32]>,
     permissions: Arc<Permissions>,
 }
 
@@ -136,6 +163,7 @@ pub struct Policy {
     identities: Vec<Identity>,
     anonymous: Option<Arc<Permissions>>,
     zenoh_users_file: Option<PathBuf>,
+    tls: Option<TlsFiles>,
 }
 
 impl fmt::Debug for Policy {
@@ -145,6 +173,7 @@ impl fmt::Debug for Policy {
             .field("identities", &names)
             .field("anonymous", &self.anonymous)
             .field("zenoh_users_file", &self.zenoh_users_file)
+            .field("tls", &self.tls)
             .finish()
     }
 }
@@ -271,11 +300,20 @@ impl Policy {
             source,
         })?;
         let mut policy = Self::parse(path, &text)?;
-        if let Some(users) = &policy.zenoh_users_file
-            && users.is_relative()
-            && let Some(dir) = path.parent()
-        {
-            policy.zenoh_users_file = Some(dir.join(users));
+        if let Some(dir) = path.parent() {
+            let beside = |p: &mut PathBuf| {
+                if p.is_relative() {
+                    *p = dir.join(&*p);
+                }
+            };
+            if let Some(users) = policy.zenoh_users_file.as_mut() {
+                beside(users);
+            }
+            if let Some(tls) = policy.tls.as_mut() {
+                beside(&mut tls.certificate);
+                beside(&mut tls.private_key);
+                beside(&mut tls.ca);
+            }
         }
         Ok(policy)
     }
@@ -303,6 +341,8 @@ impl Policy {
             if id.name.trim().is_empty() {
                 return Err(invalid("an [[identity]] has an empty name".into()));
             }
+            check_identity_name(&id.name)
+                .map_err(|e| invalid(format!("[[identity]] name: {e}")))?;
             if identities.iter().any(|i| i.name == id.name) {
                 return Err(invalid(format!(
                     "identity {:?} is given twice; merge the two entries",
@@ -310,12 +350,18 @@ impl Policy {
                 )));
             }
             let who = format!("identity {:?}", id.name);
-            let Some(secret_hash) = unhex(&id.secret_sha3) else {
-                return Err(invalid(format!(
-                    "{who}: secret_sha3 must be 64 hex digits (the output of \
-                     `cargo run -p tca-central --example hash_secret -- {}`)",
-                    id.name
-                )));
+            let secret_hash = match &id.secret_sha3 {
+                Some(text) => match unhex(text) {
+                    Some(hash) => Some(hash),
+                    None => {
+                        return Err(invalid(format!(
+                            "{who}: secret_sha3 must be 64 hex digits (the output of \
+                             `cargo run -p tca-central --example hash_secret -- {}`)",
+                            id.name
+                        )));
+                    }
+                },
+                None => None,
             };
             let modules = id.modules.unwrap_or_else(|| vec![id.name.clone()]);
             check_patterns(&who, "modules", &modules)?;
@@ -345,10 +391,15 @@ impl Policy {
             }
             None => None,
         };
+        let tls = file
+            .transport
+            .tls
+            .map(|t| TlsFiles::new(t.certificate, t.private_key, t.ca));
         Ok(Policy {
             identities,
             anonymous,
             zenoh_users_file: file.transport.zenoh_users_file,
+            tls,
         })
     }
 
@@ -357,38 +408,89 @@ impl Policy {
         self.zenoh_users_file.as_deref()
     }
 
-    /// Admits a module named `module` presenting `credentials`, or says why not.
+    /// Central's TLS files (`[transport.tls]`), if any.
+    pub fn tls(&self) -> Option<&TlsFiles> {
+        self.tls.as_ref()
+    }
+
+    /// What central's zenoh router must do: the users file, TLS, and the policy's identities,
+    /// each of which its access control confines to its own keys when the router can
+    /// authenticate clients.
+    pub fn router_security(&self) -> RouterSecurity {
+        RouterSecurity {
+            users_file: self.zenoh_users_file.clone(),
+            tls: self.tls.clone(),
+            identities: self.identities.iter().map(|i| i.name.clone()).collect(),
+        }
+    }
+
+    /// Admits a module named `module` presenting `credentials`, or says why not. With
+    /// `transport_identity` (the identity its zenoh user or certificate proved to the router)
+    /// the module is that identity: credentials are then optional, and must name it when given.
     pub fn authenticate(
         &self,
         module: &str,
         credentials: Option<&Credentials>,
+        transport_identity: Option<&str>,
     ) -> std::result::Result<Grant, String> {
-        let Some(c) = credentials else {
-            return match &self.anonymous {
-                Some(p) => Ok(Grant {
-                    identity: "anonymous".into(),
-                    permissions: p.clone(),
-                }),
-                None => Err(
-                    "central requires credentials (its policy has no [anonymous] \
-                     section): give the module an identity and secret (ModuleBuilder::identity, \
-                     or the TCA_IDENTITY and TCA_SECRET environment variables)"
-                        .into(),
-                ),
-            };
-        };
-        let presented = digest(&c.identity, &c.secret);
-        let found = self
-            .identities
-            .iter()
-            .find(|i| i.name == c.identity && same(&i.secret_hash, &presented));
-        let Some(identity) = found else {
-            // One answer for both cases, so a stranger cannot probe which identities exist.
-            return Err(format!(
-                "identity {:?} is unknown or its secret is wrong; check TCA_IDENTITY/TCA_SECRET \
-                 against central's policy file",
-                c.identity
-            ));
+        let identity = match (transport_identity, credentials) {
+            (Some(t), Some(c)) if c.identity != t => {
+                return Err(format!(
+                    "this link was authenticated as identity {t:?} (its zenoh user or \
+                     certificate) but its hello names identity {:?}; give the module the \
+                     identity of its login or certificate, or no TCA_IDENTITY at all",
+                    c.identity
+                ));
+            }
+            (Some(t), c) => {
+                let found = self.identities.iter().find(|i| i.name == t);
+                let Some(identity) = found else {
+                    return Err(format!(
+                        "this link was authenticated as {t:?}, which is no identity of the \
+                         policy; add an [[identity]] named {t:?}"
+                    ));
+                };
+                if let (Some(c), Some(hash)) = (c, &identity.secret_hash)
+                    && !same(hash, &digest(&c.identity, &c.secret))
+                {
+                    return Err(format!(
+                        "identity {t:?}: the secret in the hello is wrong; check TCA_SECRET \
+                         against central's policy file, or leave it out (the link's login or \
+                         certificate already proves the identity)"
+                    ));
+                }
+                identity
+            }
+            (None, None) => {
+                return match &self.anonymous {
+                    Some(p) => Ok(Grant {
+                        identity: "anonymous".into(),
+                        permissions: p.clone(),
+                    }),
+                    None => Err(
+                        "central requires credentials (its policy has no [anonymous] \
+                         section): give the module an identity and secret \
+                         (ModuleBuilder::identity, or the TCA_IDENTITY and TCA_SECRET \
+                         environment variables)"
+                            .into(),
+                    ),
+                };
+            }
+            (None, Some(c)) => {
+                let presented = digest(&c.identity, &c.secret);
+                let found = self.identities.iter().find(|i| {
+                    i.name == c.identity && i.secret_hash.is_some_and(|h| same(&h, &presented))
+                });
+                // One answer for every case, so a stranger cannot probe which identities
+                // exist.
+                found.ok_or_else(|| {
+                    format!(
+                        "identity {:?} is unknown or its secret is wrong; check \
+                         TCA_IDENTITY/TCA_SECRET against central's policy file",
+                        c.identity
+                    )
+                })?
+            }
         };
         if !matches_any(&identity.permissions.modules, module) {
             return Err(format!(
@@ -445,7 +547,7 @@ mod tests {
     fn right_secret_admits_and_rules_apply() {
         let p = policy();
         let g = p
-            .authenticate("gait", Some(&creds("gait", "s3cret")))
+            .authenticate("gait", Some(&creds("gait", "s3cret")), None)
             .unwrap();
         assert_eq!(g.identity, "gait");
         assert!(g.may_send("ltmFootfall").is_ok());
@@ -464,22 +566,24 @@ mod tests {
     fn refusals() {
         let p = policy();
         let wrong = p
-            .authenticate("gait", Some(&creds("gait", "guess")))
+            .authenticate("gait", Some(&creds("gait", "guess")), None)
             .unwrap_err();
         assert!(wrong.contains("unknown or its secret is wrong"), "{wrong}");
-        let unknown = p.authenticate("x", Some(&creds("x", "y"))).unwrap_err();
+        let unknown = p
+            .authenticate("x", Some(&creds("x", "y")), None)
+            .unwrap_err();
         assert!(unknown.contains("unknown"), "{unknown}");
-        let none = p.authenticate("gait", None).unwrap_err();
+        let none = p.authenticate("gait", None, None).unwrap_err();
         assert!(none.contains("requires credentials"), "{none}");
         let other = p
-            .authenticate("ltm", Some(&creds("gait", "s3cret")))
+            .authenticate("ltm", Some(&creds("gait", "s3cret")), None)
             .unwrap_err();
         assert!(
             other.contains("may not connect as module \"ltm\""),
             "{other}"
         );
         assert!(
-            p.authenticate("ping-1", Some(&creds("tools", "t00ls")))
+            p.authenticate("ping-1", Some(&creds("tools", "t00ls")), None)
                 .is_ok()
         );
     }
@@ -491,7 +595,7 @@ mod tests {
             "[anonymous]\nsend = [\"q*\"]\n[transport]\nzenoh_users_file = \"u.txt\"\n",
         )
         .unwrap();
-        let g = p.authenticate("anyone", None).unwrap();
+        let g = p.authenticate("anyone", None, None).unwrap();
         assert_eq!(g.identity, "anonymous");
         assert!(g.may_send("query1").is_ok());
         assert!(g.may_register("x").is_err());
@@ -516,6 +620,62 @@ mod tests {
         assert!(e.to_string().contains("twice"), "{e}");
         let empty = format!("[[identity]]\nname=\"a\"\nsecret_sha3=\"{h}\"\nsend=[\"\"]\n");
         assert!(Policy::parse(Path::new("p.toml"), &empty).is_err());
+    }
+
+    #[test]
+    fn a_transport_identity_is_the_identity() {
+        let mut p = policy();
+        let text = "[[identity]]\nname = \"nav\"\nsend = [\"go\"]\n";
+        let nav = Policy::parse(Path::new("p.toml"), text).unwrap();
+        p.identities.extend(nav.identities);
+        // No credentials: the login or certificate is the identity, also one without secret.
+        let g = p.authenticate("gait", None, Some("gait")).unwrap();
+        assert_eq!(g.identity, "gait");
+        assert_eq!(
+            p.authenticate("nav", None, Some("nav")).unwrap().identity,
+            "nav"
+        );
+        // Credentials must name it, and a secret given must be right.
+        assert!(
+            p.authenticate("gait", Some(&creds("gait", "s3cret")), Some("gait"))
+                .is_ok()
+        );
+        let e = p
+            .authenticate("gait", Some(&creds("gait", "guess")), Some("gait"))
+            .unwrap_err();
+        assert!(e.contains("secret in the hello is wrong"), "{e}");
+        let e = p
+            .authenticate("gait", Some(&creds("tools", "t00ls")), Some("gait"))
+            .unwrap_err();
+        assert!(e.contains("authenticated as identity \"gait\""), "{e}");
+        // Its module rule still applies; an identity without secret cannot log in by hello.
+        assert!(p.authenticate("ltm", None, Some("gait")).is_err());
+        let e = p
+            .authenticate("nav", Some(&creds("nav", "")), None)
+            .unwrap_err();
+        assert!(e.contains("unknown or its secret is wrong"), "{e}");
+        assert!(p.authenticate("x", None, Some("stranger")).is_err());
+    }
+
+    #[test]
+    fn identity_names_must_fit_in_keys_and_tls_paths_are_beside_the_file() {
+        let e = Policy::parse(Path::new("p.toml"), "[[identity]]\nname = \"a/b\"\n").unwrap_err();
+        assert!(e.to_string().contains("ASCII letters"), "{e}");
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("p.toml");
+        std::fs::write(
+            &file,
+            "[transport.tls]\ncertificate = \"c.pem\"\nprivate_key = \"c.key\"\nca = \"/etc/ca.pem\"\n\
+             [[identity]]\nname = \"gait\"\n",
+        )
+        .unwrap();
+        let p = Policy::load(&file).unwrap();
+        let tls = p.tls().unwrap();
+        assert_eq!(tls.certificate, dir.path().join("c.pem"));
+        assert_eq!(tls.ca, Path::new("/etc/ca.pem"));
+        let security = p.router_security();
+        assert!(security.authenticators().certificates);
+        assert_eq!(security.identities, vec!["gait".to_owned()]);
     }
 
     #[test]

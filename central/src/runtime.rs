@@ -83,6 +83,12 @@ pub struct Stats {
     /// Times central stopped taking frames from modules until its log writer caught up
     /// (`max_log_backlog`).
     pub log_waits: u64,
+    /// Messages from zenoh clients that central's router refused by its access control (when
+    /// the policy authenticates zenoh clients, each identity is confined to its own keys):
+    /// frames published on another identity's keys, subscriptions, liveliness tokens and
+    /// queries outside its own. They never reach central's core, so they are not in
+    /// `counters`.
+    pub refused_by_router: u64,
 }
 
 /// The most each of central's bounded queues has held at once since it started: the largest
@@ -112,6 +118,8 @@ pub struct HighWater {
 #[derive(Clone, Debug)]
 pub struct CentralHandle {
     tx: mpsc::UnboundedSender<Input>,
+    /// The zenoh router's session, when its access control is on (for its refusal count).
+    router: Arc<std::sync::OnceLock<zenoh::Session>>,
     hub: Arc<dyn Hub>,
     next_link: Arc<AtomicU32>,
     inbox_limits: (u32, u64),
@@ -135,6 +143,15 @@ impl CentralHandle {
 
     /// Opens a link: its number, its inbox and the receiver of what central sends on it.
     pub(crate) fn attach(&self) -> Result<(LinkId, Arc<Inbox>, FrameReceiver)> {
+        self.attach_as(None)
+    }
+
+    /// Opens a link whose transport authenticated its peer as `identity`, if given (the
+    /// module's hello is then held to that identity).
+    pub(crate) fn attach_as(
+        &self,
+        identity: Option<String>,
+    ) -> Result<(LinkId, Arc<Inbox>, FrameReceiver)> {
         let link = self.allocate_link();
         let (sink, from_central) = mpsc::unbounded_channel();
         let gauge = Arc::new(Gauge::new(link, self.outbox_limits, self.hub.clone()));
@@ -146,6 +163,11 @@ impl CentralHandle {
         self.tx
             .send(Input::Event(Event::Opened(link)))
             .map_err(|_| CentralError::Stopped)?;
+        if let Some(identity) = identity {
+            self.tx
+                .send(Input::Event(Event::Identified(link, identity)))
+                .map_err(|_| CentralError::Stopped)?;
+        }
         Ok((link, inbox, FrameReceiver::metered(from_central, gauge)))
     }
 
@@ -155,7 +177,19 @@ impl CentralHandle {
         self.tx
             .send(Input::Inspect(tx))
             .map_err(|_| CentralError::Stopped)?;
-        rx.await.map_err(|_| CentralError::Stopped)
+        let mut stats = rx.await.map_err(|_| CentralError::Stopped)?;
+        stats.refused_by_router = self.refused_by_router().await?;
+        Ok(stats)
+    }
+
+    /// Messages the zenoh router's access control refused so far (0 without it).
+    async fn refused_by_router(&self) -> Result<u64> {
+        match self.router.get() {
+            Some(session) => tca_link::zenoh::acl::refusals(session)
+                .await
+                .map_err(CentralError::from),
+            None => Ok(0),
+        }
     }
 
     pub(crate) fn allocate_link(&self) -> LinkId {
@@ -215,10 +249,12 @@ impl RunningCentral {
 
     /// Stops central: closes every link, finishes the log and returns the final statistics.
     pub async fn shutdown(self) -> Result<Stats> {
+        let refused = self.handle.refused_by_router().await.unwrap_or(0);
         let _ = self.handle.tx.send(Input::Shutdown);
         // No new local connections; the socket files go.
         drop(self.local);
-        let stats = self.task.await.map_err(|_| CentralError::Stopped)??;
+        let mut stats = self.task.await.map_err(|_| CentralError::Stopped)??;
+        stats.refused_by_router = refused;
         if let Some(z) = self.zenoh {
             z.close().await;
         }
@@ -243,8 +279,11 @@ pub struct StartOptions {
     /// `tcp/127.0.0.1:7447`), any mix of them.
     pub listen: Vec<String>,
     /// Listen on endpoints other machines can reach (`tcp/0.0.0.0:7447`, a LAN address, a
-    /// host name) without a policy. Off (the default), [`start`] refuses that with
-    /// [`CentralError::Insecure`]: an open central admits any process that finds it.
+    /// host name) without a policy, or with a policy that authenticates no zenoh client (no
+    /// `zenoh_users_file`, no `[transport.tls]`). Off (the default), [`start`] refuses the
+    /// first with [`CentralError::Insecure`] (an open central admits any process that finds
+    /// it) and the second with [`CentralError::Unisolated`] (its router cannot keep modules
+    /// from reading and speaking for each other).
     pub insecure: bool,
 }
 
@@ -269,6 +308,7 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
     let handle = CentralHandle {
         hub: Arc::new(DriverHub(tx.clone())),
         tx,
+        router: Arc::default(),
         next_link: Arc::new(AtomicU32::new(1)),
         inbox_limits: (
             options.config.max_inbox_frames,
@@ -287,11 +327,30 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
         .listen
         .iter()
         .partition(|e| LocalEndpoint::is_local(e));
-    if options.config.policy.is_none() && !options.insecure {
-        for e in &zenoh_endpoints {
-            if let tca_link::zenoh::Exposure::Network(reason) = tca_link::zenoh::exposure(e) {
+    let security = options
+        .config
+        .policy
+        .as_ref()
+        .map(|p| p.router_security())
+        .unwrap_or_default();
+    for e in &zenoh_endpoints {
+        let tca_link::zenoh::Exposure::Network(reason) = tca_link::zenoh::exposure(e) else {
+            continue;
+        };
+        if options.config.policy.is_none() {
+            if !options.insecure {
                 return Err(CentralError::Insecure(reason));
             }
+        } else if !security.authenticators().any() {
+            if !options.insecure {
+                return Err(CentralError::Unisolated(reason));
+            }
+            tracing::warn!(
+                endpoint = %e,
+                "the policy authenticates no zenoh client (no zenoh_users_file, no \
+                 [transport.tls]): any client that reaches this endpoint can read every \
+                 module's frames and publish on their keys (--insecure)"
+            );
         }
     }
     let mut local = Vec::new();
@@ -311,13 +370,12 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
     let zenoh = if zenoh_endpoints.is_empty() {
         None
     } else {
-        let users = options
-            .config
-            .policy
-            .as_ref()
-            .and_then(|p| p.zenoh_users_file().map(|f| f.to_owned()));
         let endpoints: Vec<String> = zenoh_endpoints.into_iter().cloned().collect();
-        Some(ZenohCentral::start(&endpoints, users.as_deref(), handle.clone()).await?)
+        let zenoh = ZenohCentral::start(&endpoints, &security, handle.clone()).await?;
+        if security.authenticators().any() {
+            let _ = handle.router.set(zenoh.session().clone());
+        }
+        Some(zenoh)
     };
     let limits = handle.outbox_limits;
     let max_log_backlog = options.config.max_log_backlog.max(1) as usize;
@@ -650,5 +708,6 @@ fn stats(core: &Central) -> Stats {
         tree: core.render_tree(),
         high_water: HighWater::default(),
         log_waits: 0,
+        refused_by_router: 0,
     }
 }

@@ -25,7 +25,9 @@
 //!   module's side), [`LocalListener`] (central's side), [`LocalEndpoint`], [`PeerPolicy`].
 //! - [`net`]: free loopback ports and endpoints.
 //! - [`zenoh`](mod@zenoh): the zenoh key scheme and liveliness tokens, router and client
-//!   configuration, the zenoh login, and [`ZenohTransport`], a module's client side.
+//!   configuration, the zenoh login, mutual TLS ([`TlsFiles`]), the router's access control
+//!   that confines each identity to its own keys, and [`ZenohTransport`], a module's client
+//!   side.
 //! - [`error`](mod@error): [`LinkError`].
 
 pub mod error;
@@ -45,7 +47,7 @@ pub use inproc::{InProcLink, InProcSender, InProcTransport};
 pub use local::{LocalEndpoint, LocalListener, LocalTransport, PeerPolicy};
 pub use outbox::{FrameReceiver, Gauge, OutboxLimits, OutboxUse};
 pub use transport::{FrameSender, Link, Presence, SendFrame, Transport};
-pub use zenoh::{ZenohLogin, ZenohTransport};
+pub use zenoh::{TlsFiles, ZenohLogin, ZenohTransport};
 
 /// A link's number, given by central when the link opens. It is also the high half of every
 /// message id the module on it sends.

@@ -35,7 +35,8 @@ pub(crate) struct CentralArgs {
     #[arg(long, default_value_t = CentralConfig::default().max_frame_bytes)]
     max_frame_bytes: usize,
     /// Registration policy (TOML): identities and secrets modules must present, what each may
-    /// register and send, and optionally a zenoh users file (see policy.example.toml).
+    /// register and send, and optionally a zenoh users file and TLS files, with which the
+    /// zenoh router confines each identity to its own keys (see policy.example.toml).
     #[arg(long, value_name = "FILE")]
     policy: Option<PathBuf>,
     /// Most frames of one module waiting to be handled by central; more are refused.
@@ -63,7 +64,9 @@ pub(crate) struct CentralArgs {
     #[arg(long, default_value_t = CentralConfig::default().max_log_backlog)]
     max_log_backlog: u32,
     /// Listen on endpoints other machines can reach (tcp/0.0.0.0:7447, a LAN address) with
-    /// no --policy. Without it central refuses to: an open central admits anyone who finds it.
+    /// no --policy, or with a policy that authenticates no zenoh client (no zenoh users file,
+    /// no TLS). Without it central refuses to: an open central admits anyone who finds it, and
+    /// a router that cannot tell clients apart lets each read and speak for the others.
     #[arg(long)]
     insecure: bool,
     /// Keep the system's simulated clock: release messages in simulated-time order (for
@@ -125,8 +128,12 @@ pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
         .context("cannot wait for Ctrl-C")?;
     let stats = central.shutdown().await?;
     eprintln!(
-        "central stopped: {} frames in, {} out, {} bad",
-        stats.counters.frames_in, stats.counters.frames_out, stats.counters.bad_frames
+        "central stopped: {} frames in, {} out, {} bad, {} messages refused by the router's \
+         access control",
+        stats.counters.frames_in,
+        stats.counters.frames_out,
+        stats.counters.bad_frames,
+        stats.refused_by_router
     );
     Ok(ExitCode::SUCCESS)
 }

@@ -10,6 +10,11 @@ pub use tca_link::{InboxUse, LinkId, OutboxUse};
 pub enum Event {
     /// A link opened (the module will say hello next).
     Opened(LinkId),
+    /// The transport authenticated the link's peer as this identity of the policy (its zenoh
+    /// user or certificate common name, which the router's access control confines to its own
+    /// keys). Comes right after `Opened`, before any frame; the module's hello is then held to
+    /// that identity.
+    Identified(LinkId, String),
     /// A frame arrived on a link.
     Frame(LinkId, Bytes),
     /// A link closed: the module left or crashed.

@@ -17,11 +17,19 @@ impl Central {
             link,
             Link {
                 module: None,
+                identity: None,
                 congested: false,
                 unread: Default::default(),
             },
         );
         self.log_link(link, LinkEvent::Opened, None, String::new(), out);
+    }
+
+    /// The transport authenticated the link's peer as `identity`.
+    pub(super) fn link_identified(&mut self, link: LinkId, identity: String) {
+        if let Some(l) = self.links.get_mut(&link) {
+            l.identity = Some(identity);
+        }
     }
 
     /// The first frame on a link must be a hello.
@@ -81,9 +89,14 @@ impl Central {
             );
             return self.refuse(link, &envelope, reason, out);
         }
+        let transport_identity = self.links.get(&link).and_then(|l| l.identity.clone());
         let grant = match &self.config.policy {
             Some(policy) => {
-                match policy.authenticate(hello.module.as_str(), credentials.as_ref()) {
+                match policy.authenticate(
+                    hello.module.as_str(),
+                    credentials.as_ref(),
+                    transport_identity.as_deref(),
+                ) {
                     Ok(grant) => Some(grant),
                     Err(reason) => return self.refuse(link, &envelope, reason, out),
                 }

@@ -139,6 +139,8 @@ pub struct Counters {
 #[derive(Debug)]
 struct Link {
     module: Option<ModuleName>,
+    /// The identity its transport authenticated (None: the transport knows no identity).
+    identity: Option<String>,
     /// Its outbox is at half its bound or more, or may be (see `congestion`): no new work goes
     /// to it.
     congested: bool,
@@ -211,6 +213,7 @@ impl Central {
         self.now = self.now.max(now_ns);
         match event {
             Event::Opened(link) => self.link_opened(link, out),
+            Event::Identified(link, identity) => self.link_identified(link, identity),
             Event::Frame(link, frame) => self.frame(link, frame, out),
             Event::Closed(link) => self.link_closed(link, out),
             Event::Tick => {

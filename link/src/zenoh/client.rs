@@ -6,8 +6,11 @@ use tokio::sync::mpsc;
 use zenoh::qos::CongestionControl;
 use zenoh::sample::SampleKind;
 
-use super::config::{ZenohLogin, client_config_with_login};
-use super::keys::{CENTRAL_ALIVE_KEY, alive_key, down_key, up_key};
+use super::config::{ZenohLogin, client_config_secured};
+use super::keys::{
+    CENTRAL_ALIVE_KEY, NO_IDENTITY, alive_key, check_identity_name, down_key, up_key,
+};
+use super::tls::TlsFiles;
 use crate::outbox::FrameReceiver;
 use crate::transport::{FrameSender, Link, Presence, SendFrame, Transport};
 use crate::{LinkError, Result};
@@ -17,15 +20,18 @@ use crate::{LinkError, Result};
 pub struct ZenohTransport {
     endpoints: Vec<String>,
     login: Option<ZenohLogin>,
+    tls: Option<TlsFiles>,
 }
 
 impl ZenohTransport {
     /// Connects to central at `endpoints` (e.g. `tcp/127.0.0.1:7447`), logging in with
-    /// `TCA_ZENOH_USER`/`TCA_ZENOH_PASSWORD` when they are set.
+    /// `TCA_ZENOH_USER`/`TCA_ZENOH_PASSWORD` when they are set and presenting the certificate
+    /// of `TCA_ZENOH_TLS_CERT`/`TCA_ZENOH_TLS_KEY`/`TCA_ZENOH_TLS_CA` when they are.
     pub fn new(endpoints: Vec<String>) -> Self {
         ZenohTransport {
             endpoints,
             login: None,
+            tls: None,
         }
     }
 
@@ -35,7 +41,15 @@ impl ZenohTransport {
         ZenohTransport {
             endpoints,
             login: Some(login),
+            tls: None,
         }
+    }
+
+    /// The same, presenting `tls`'s certificate on `tls/` endpoints and checking central's
+    /// against its CA (central's router requires it when its policy has `[transport.tls]`).
+    pub fn tls(mut self, tls: TlsFiles) -> Self {
+        self.tls = Some(tls);
+        self
     }
 
     /// The endpoints it connects to.
@@ -44,16 +58,36 @@ impl ZenohTransport {
     }
 
     async fn open_link(&self) -> Result<Link> {
-        let env_login;
         let login = match &self.login {
-            Some(l) => Some(l),
-            None => {
-                env_login = ZenohLogin::from_env();
-                env_login.as_ref()
-            }
+            Some(l) => Some(l.clone()),
+            None => ZenohLogin::from_env(),
         };
-        open(&self.endpoints, login).await
+        let tls = match &self.tls {
+            Some(t) => Some(t.clone()),
+            None => TlsFiles::from_env()?,
+        };
+        open(&self.endpoints, login.as_ref(), tls.as_ref()).await
     }
+}
+
+/// The identity the module's keys carry: its zenoh user, else its certificate's common name,
+/// else [`NO_IDENTITY`]. A user and a certificate naming two identities are refused.
+pub fn session_identity(login: Option<&ZenohLogin>, tls: Option<&TlsFiles>) -> Result<String> {
+    let cn = tls.map(TlsFiles::common_name).transpose()?;
+    let who = match (login, cn) {
+        (Some(l), Some(cn)) if l.user != cn => {
+            return Err(LinkError::Config(format!(
+                "zenoh user {:?} and certificate common name {cn:?} name two identities; \
+                 log in as the identity the certificate names",
+                l.user
+            )));
+        }
+        (Some(l), _) => l.user.clone(),
+        (None, Some(cn)) => cn,
+        (None, None) => return Ok(NO_IDENTITY.to_owned()),
+    };
+    check_identity_name(&who).map_err(LinkError::Config)?;
+    Ok(who)
 }
 
 impl Transport for ZenohTransport {
@@ -90,10 +124,15 @@ fn open_error(e: impl std::fmt::Display) -> LinkError {
     LinkError::Open(e.to_string())
 }
 
-async fn open(endpoints: &[String], login: Option<&ZenohLogin>) -> Result<Link> {
-    let config = client_config_with_login(endpoints, login)?;
+async fn open(
+    endpoints: &[String],
+    login: Option<&ZenohLogin>,
+    tls: Option<&TlsFiles>,
+) -> Result<Link> {
+    let config = client_config_secured(endpoints, login, tls)?;
+    let who = session_identity(login, tls)?;
     let session = zenoh::open(config).await.map_err(|e| {
-        let hint = match login {
+        let mut hint = match login {
             Some(l) => format!(
                 "; central may have refused zenoh user {:?} (check TCA_ZENOH_USER/TCA_ZENOH_PASSWORD \
                  against its zenoh users file)",
@@ -103,6 +142,12 @@ async fn open(endpoints: &[String], login: Option<&ZenohLogin>) -> Result<Link> 
                      TCA_ZENOH_PASSWORD"
                 .into(),
         };
+        if tls.is_some() {
+            hint.push_str(
+                "; central may have refused the certificate (is it signed by the CA central \
+                 trusts, and is central's signed by TCA_ZENOH_TLS_CA?)",
+            );
+        }
         LinkError::Open(format!(
             "no central at {}: {e}; start one with `tca central --listen ENDPOINT`{hint}",
             endpoints.join(", ")
@@ -111,21 +156,21 @@ async fn open(endpoints: &[String], login: Option<&ZenohLogin>) -> Result<Link> 
     let zid = session.zid().to_string();
     let (in_tx, rx) = mpsc::unbounded_channel();
     let subscriber = session
-        .declare_subscriber(down_key(&zid))
+        .declare_subscriber(down_key(&who, &zid))
         .callback(move |sample| {
             let _ = in_tx.send(Bytes::from(sample.payload().to_bytes().into_owned()));
         })
         .await
         .map_err(open_error)?;
     let publisher = session
-        .declare_publisher(up_key(&zid))
+        .declare_publisher(up_key(&who, &zid))
         .congestion_control(CongestionControl::Block)
         .express(true)
         .await
         .map_err(open_error)?;
     let token = session
         .liveliness()
-        .declare_token(alive_key(&zid))
+        .declare_token(alive_key(&who, &zid))
         .await
         .map_err(open_error)?;
     let (presence_tx, presence) = mpsc::unbounded_channel();

@@ -3,8 +3,8 @@
 use std::sync::Arc;
 
 use tca_link::{
-    InProcTransport, Link, LinkError, LocalEndpoint, LocalTransport, Transport, ZenohLogin,
-    ZenohTransport,
+    InProcTransport, Link, LinkError, LocalEndpoint, LocalTransport, TlsFiles, Transport,
+    ZenohLogin, ZenohTransport,
 };
 
 use crate::error::{ModuleError, Result};
@@ -16,7 +16,9 @@ use crate::error::{ModuleError, Result};
 ///   `local/NAME`);
 /// - over zenoh, for a central elsewhere: [`Connector::zenoh`]`("tcp/HOST:7447")`, logging in
 ///   with `TCA_ZENOH_USER`/`TCA_ZENOH_PASSWORD` when they are set, or
-///   [`Connector::zenoh_with_login`];
+///   [`Connector::zenoh_with_login`]; with mutual TLS (`tls/HOST:7448`), presenting the
+///   certificate of `TCA_ZENOH_TLS_CERT`/`TCA_ZENOH_TLS_KEY`/`TCA_ZENOH_TLS_CA` when they are
+///   set, or [`Connector::zenoh_with_tls`];
 /// - by endpoint, whichever of the two it names: [`Connector::endpoint`];
 /// - any other [`Transport`]: [`Connector::new`].
 #[derive(Clone, Debug)]
@@ -69,6 +71,13 @@ impl Connector {
             vec![endpoint.into()],
             ZenohLogin::new(user, password),
         ))
+    }
+
+    /// A zenoh connector for one endpoint (`tls/HOST:PORT`) that presents the certificate of
+    /// `tls` and checks central's against its CA (central requires it when its policy has
+    /// `[transport.tls]`); the certificate's common name is the module's identity.
+    pub fn zenoh_with_tls(endpoint: impl Into<String>, tls: TlsFiles) -> Self {
+        Self::new(ZenohTransport::new(vec![endpoint.into()]).tls(tls))
     }
 
     /// Describes where it connects, for messages.

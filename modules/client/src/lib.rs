@@ -87,7 +87,7 @@ pub use builder::{ModuleBuilder, REQUERIES_AFTER_CRASH};
 pub use compute_time::ComputeTime;
 pub use connector::Connector;
 pub use context::Context;
-pub use credentials::ZenohLogin;
+pub use credentials::{TlsFiles, ZenohLogin};
 pub use error::{HandlerError, ModuleError, Result};
 pub use module::{DEFAULT_QUERY_TIMEOUT, Module, Task, WatchedTask, raise_action, send_action};
 pub use tca_messages::control::MonitorAction;

@@ -87,10 +87,7 @@ async fn start(config: CentralConfig, zenoh: bool, log: Option<&Path>) -> (Runni
 }
 
 /// The echo module, with a counter of the map updates it received.
-async fn echo(
-    connector: &Connector,
-    secret: &str,
-) -> Result<(Module, Arc<AtomicU64>), ModuleError> {
+async fn echo(connect: &Connect, secret: &str) -> Result<(Module, Arc<AtomicU64>), ModuleError> {
     let maps = Arc::new(AtomicU64::new(0));
     let seen = maps.clone();
     let module = Module::builder("echo")
@@ -103,9 +100,17 @@ async fn echo(
                 Ok(())
             }
         })
-        .connect(connector)
+        .connect(&connect("echo"))
         .await?;
     Ok((module, maps))
+}
+
+/// The connector a module of an identity uses (over zenoh, each identity logs in as itself).
+type Connect = dyn Fn(&str) -> Connector;
+
+/// The same connector for every identity.
+fn same(connector: Connector) -> impl Fn(&str) -> Connector {
+    move |_| connector.clone()
 }
 
 fn refused_reason(result: Result<Module, ModuleError>) -> String {
@@ -147,15 +152,15 @@ async fn refusals_at_hello(connector: &Connector) {
     );
 }
 
-async fn permitted_and_refused_traffic(connector: &Connector, central: &RunningCentral) {
-    let (_echo, maps) = within("echo connects", echo(connector, ECHO_SECRET))
+async fn permitted_and_refused_traffic(connect: &Connect, central: &RunningCentral) {
+    let (_echo, maps) = within("echo connects", echo(connect, ECHO_SECRET))
         .await
         .unwrap();
     let asker = within(
         "asker connects",
         Module::builder("asker")
             .identity("asker", ASKER_SECRET)
-            .connect(connector),
+            .connect(&connect("asker")),
     )
     .await
     .unwrap();
@@ -171,7 +176,7 @@ async fn permitted_and_refused_traffic(connector: &Connector, central: &RunningC
     let r = Module::builder("asker-2")
         .identity("asker", ASKER_SECRET)
         .handle(|_ctx, q: Secret| async move { Ok(q.0) })
-        .connect(connector)
+        .connect(&connect("asker"))
         .await;
     match r {
         Err(ModuleError::Registration(reasons)) => {
@@ -189,7 +194,7 @@ async fn permitted_and_refused_traffic(connector: &Connector, central: &RunningC
         "second echo",
         Module::builder("echo-sender")
             .identity("echo", ECHO_SECRET)
-            .connect(connector),
+            .connect(&connect("echo")),
     )
     .await
     .unwrap();
@@ -240,7 +245,7 @@ async fn policy_in_process() {
     let (central, _) = start(config, false, Some(&log)).await;
     let connector = Connector::from(central.in_process());
     refusals_at_hello(&connector).await;
-    permitted_and_refused_traffic(&connector, &central).await;
+    permitted_and_refused_traffic(&same(connector), &central).await;
     central.shutdown().await.unwrap();
     // The log tells the story, without a single secret in it.
     let bytes = std::fs::read(&log).unwrap();
@@ -294,14 +299,56 @@ async fn policy_over_the_local_link() {
     let (central, endpoint) = start_local(config).await;
     let connector = Connector::endpoint(endpoint);
     refusals_at_hello(&connector).await;
-    permitted_and_refused_traffic(&connector, &central).await;
+    permitted_and_refused_traffic(&same(connector), &central).await;
     central.shutdown().await.unwrap();
 }
 
+/// Each identity's zenoh login: the user is the identity.
 fn users_file(dir: &Path) -> std::path::PathBuf {
     let path = dir.join("zenoh-users.txt");
-    std::fs::write(&path, "tca-modules:zenoh-pass-1\n").unwrap();
+    std::fs::write(&path, "echo:zp-echo\nasker:zp-asker\nworker:zp-worker\n").unwrap();
     path
+}
+
+/// Connects as `identity` logging in to zenoh as that identity.
+fn login(endpoint: &str) -> impl Fn(&str) -> Connector + use<> {
+    let endpoint = endpoint.to_owned();
+    move |identity| Connector::zenoh_with_login(&endpoint, identity, format!("zp-{identity}"))
+}
+
+/// With a zenoh login the link's identity is the login's: a hello naming another identity, a
+/// wrong secret or a module name outside the identity's rule is refused; no credentials at
+/// all are fine (the login proves the identity).
+async fn refusals_at_hello_with_login(endpoint: &str) {
+    let as_echo = Connector::zenoh_with_login(endpoint, "echo", "zp-echo");
+    let r = Module::builder("echo2")
+        .identity("asker", ASKER_SECRET)
+        .connect(&as_echo)
+        .await;
+    let reason = refused_reason(r);
+    assert!(
+        reason.contains("authenticated as identity \"echo\"") && reason.contains("\"asker\""),
+        "{reason}"
+    );
+    let r = Module::builder("echo2")
+        .identity("echo", "guess")
+        .connect(&as_echo)
+        .await;
+    let reason = refused_reason(r);
+    assert!(reason.contains("secret in the hello is wrong"), "{reason}");
+    let r = Module::builder("controller").connect(&as_echo).await;
+    let reason = refused_reason(r);
+    assert!(
+        reason.contains("may not connect as module \"controller\""),
+        "{reason}"
+    );
+    let admitted = within(
+        "a module proven by its login alone",
+        Module::builder("echo-by-login").connect(&as_echo),
+    )
+    .await
+    .unwrap();
+    admitted.close().await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -317,8 +364,8 @@ async fn policy_over_zenoh_with_zenoh_login() {
     // No zenoh login, or a wrong one: refused by zenoh when the session opens.
     for connector in [
         Connector::zenoh(endpoint.clone()),
-        Connector::zenoh_with_login(&endpoint, "tca-modules", "wrong"),
-        Connector::zenoh_with_login(&endpoint, "nobody", "zenoh-pass-1"),
+        Connector::zenoh_with_login(&endpoint, "echo", "wrong"),
+        Connector::zenoh_with_login(&endpoint, "nobody", "zp-echo"),
     ] {
         let r = within(
             "unauthenticated zenoh client",
@@ -336,9 +383,8 @@ async fn policy_over_zenoh_with_zenoh_login() {
         }
     }
     // The right zenoh login: the policy applies as in-process.
-    let connector = Connector::zenoh_with_login(&endpoint, "tca-modules", "zenoh-pass-1");
-    refusals_at_hello(&connector).await;
-    permitted_and_refused_traffic(&connector, &central).await;
+    refusals_at_hello_with_login(&endpoint).await;
+    permitted_and_refused_traffic(&login(&endpoint), &central).await;
     central.shutdown().await.unwrap();
 }
 
@@ -347,6 +393,17 @@ fn policy_example_file_parses() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../policy.example.toml");
     let policy = Policy::load(&path).unwrap();
     assert!(policy.zenoh_users_file().is_some());
+    // Its zenoh users are its identities, so the router takes it, with access control on.
+    let security = policy.router_security();
+    assert!(security.authenticators().users);
+    let config =
+        tca_link::zenoh::router_config_secured(&["tcp/127.0.0.1:7447".into()], &security).unwrap();
+    assert!(
+        config
+            .get_json("access_control/enabled")
+            .unwrap()
+            .contains("true")
+    );
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -355,8 +412,8 @@ fn policy_example_file_parses() {
 /// One module floods informs and goals; two others keep exchanging queries.
 /// With `exact`, every inform the flooder's sends accepted must reach its handler (in-process,
 /// where refusals are synchronous).
-async fn flood(connector: &Connector, central: &RunningCentral, exact: bool) {
-    let (_echo, maps) = within("echo", echo(connector, ECHO_SECRET)).await.unwrap();
+async fn flood(connect: &Connect, central: &RunningCentral, exact: bool) {
+    let (_echo, maps) = within("echo", echo(connect, ECHO_SECRET)).await.unwrap();
     let handled = Arc::new(AtomicU64::new(0));
     let h = handled.clone();
     let _worker = within(
@@ -371,7 +428,7 @@ async fn flood(connector: &Connector, central: &RunningCentral, exact: bool) {
                     Ok(())
                 }
             })
-            .connect(connector),
+            .connect(&connect("worker")),
     )
     .await
     .unwrap();
@@ -379,7 +436,7 @@ async fn flood(connector: &Connector, central: &RunningCentral, exact: bool) {
         "asker",
         Module::builder("asker")
             .identity("asker", ASKER_SECRET)
-            .connect(connector),
+            .connect(&connect("asker")),
     )
     .await
     .unwrap();
@@ -387,7 +444,7 @@ async fn flood(connector: &Connector, central: &RunningCentral, exact: bool) {
         "flooder",
         Module::builder("flooder")
             .identity("asker", ASKER_SECRET)
-            .connect(connector),
+            .connect(&connect("asker")),
     )
     .await
     .unwrap();
@@ -493,7 +550,7 @@ fn flood_config(zenoh_users: Option<&Path>) -> CentralConfig {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn flooding_module_is_throttled_in_process() {
     let (central, _) = start(flood_config(None), false, None).await;
-    flood(&Connector::from(central.in_process()), &central, true).await;
+    flood(&same(Connector::from(central.in_process())), &central, true).await;
     central.shutdown().await.unwrap();
 }
 
@@ -502,14 +559,13 @@ async fn flooding_module_is_throttled_over_zenoh() {
     let dir = tempfile::tempdir().unwrap();
     let users = users_file(dir.path());
     let (central, endpoint) = start(flood_config(Some(&users)), true, None).await;
-    let connector = Connector::zenoh_with_login(&endpoint, "tca-modules", "zenoh-pass-1");
-    flood(&connector, &central, false).await;
+    flood(&login(&endpoint), &central, false).await;
     central.shutdown().await.unwrap();
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn flooding_module_is_throttled_over_the_local_link() {
     let (central, endpoint) = start_local(flood_config(None)).await;
-    flood(&Connector::endpoint(endpoint), &central, false).await;
+    flood(&same(Connector::endpoint(endpoint)), &central, false).await;
     central.shutdown().await.unwrap();
 }

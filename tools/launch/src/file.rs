@@ -58,8 +58,8 @@ pub struct CentralSection {
     /// Keep the system's simulated clock, as `tca central --simulated-time`.
     #[serde(default)]
     pub simulated_time: bool,
-    /// Listen on endpoints other machines can reach with no policy, as
-    /// `tca central --insecure`; refused otherwise.
+    /// Listen on endpoints other machines can reach with no policy (or one that
+    /// authenticates no zenoh client), as `tca central --insecure`; refused otherwise.
     #[serde(default)]
     pub insecure: bool,
 }

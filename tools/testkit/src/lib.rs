@@ -11,10 +11,12 @@
 //!   [`in_process_central`], [`unique_local_endpoint`], [`remove_local_socket`].
 //! - [`tca`]: [`Tca`], the `tca` binary of the test's package: run to its end, spawned as a
 //!   [`ChildProcess`] killed on drop, asked for the registry; [`walk_report`].
+//! - [`tls`]: [`TestCa`], certificates for mutual-TLS tests.
 
 pub mod central;
 pub mod net;
 pub mod tca;
+pub mod tls;
 
 use std::future::Future;
 use std::path::Path;
@@ -26,6 +28,7 @@ pub use central::{
 };
 pub use net::{free_endpoint, free_port};
 pub use tca::{ChildProcess, Tca, walk_report};
+pub use tls::TestCa;
 
 /// Every await in a test is bounded by this, unless it says otherwise ([`within_for`]):
 /// long enough for a loaded two-core machine, short enough that a hang fails the test.
