@@ -63,6 +63,10 @@ pub(crate) struct PlayArgs {
     /// The module name to play under (default: the recorded bridge's).
     #[arg(long)]
     name: Option<String>,
+    /// After the recorded timeline, stay at most this long, seconds, for the recorded
+    /// requests the ground side has not sent again yet.
+    #[arg(long, default_value_t = 10.0)]
+    linger: f64,
     /// Print what was played as one line of JSON.
     #[arg(long)]
     json: bool,
@@ -200,7 +204,9 @@ async fn run_bridge(args: RunArgs) -> anyhow::Result<ExitCode> {
     }
     match ended {
         None => Ok(ExitCode::SUCCESS),
-        Some(side) => anyhow::bail!("the link to the {side} side's central closed; the bridge stopped"),
+        Some(side) => {
+            anyhow::bail!("the link to the {side} side's central closed; the bridge stopped")
+        }
     }
 }
 
@@ -218,6 +224,8 @@ async fn play(args: PlayArgs) -> anyhow::Result<ExitCode> {
             ground: Connector::endpoint(args.ground.clone()),
             speed: args.speed,
             name: args.name.clone(),
+            linger: Duration::try_from_secs_f64(args.linger)
+                .context("--linger must be zero or more seconds")?,
         },
     )
     .await?;
@@ -317,10 +325,7 @@ async fn demo(args: DemoArgs) -> anyhow::Result<ExitCode> {
             if r.same_telemetry {
                 "the same data in the same order".to_owned()
             } else {
-                format!(
-                    "DIFFERENT: {}",
-                    r.difference.clone().unwrap_or_default()
-                )
+                format!("DIFFERENT: {}", r.difference.clone().unwrap_or_default())
             },
             r.max_timing_error_ms
         );

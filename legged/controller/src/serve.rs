@@ -8,13 +8,13 @@ use tca_legged_messages::{
     LeggedStatusReply, Resume, RobotDescription, RobotModel, SupportState, Telemetry,
 };
 use tca_legged_model::RobotModel as Model;
-use tca_messages::Message;
-use tokio::time::Instant;
 use tca_legged_sim::{
     LeggedSim, MoveError, MoveException, MoveReport, isometry_to_pose, pose_to_isometry,
     world_point,
 };
+use tca_messages::Message;
 use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
+use tokio::time::Instant;
 
 use crate::config::{InjectedFault, LeggedControllerConfig};
 use crate::telemetry::{Motion, Snapshot, timed_path};
@@ -142,20 +142,21 @@ pub async fn connect(
         .handle({
             let s = s.clone();
             move |_ctx, _q: LeggedStatus| {
-            let reply = {
-                let state = s.lock();
-                let c = state.sim.counters();
-                LeggedStatusReply {
-                    clock_s: state.sim.clock_s(),
-                    falls: c.falls,
-                    collisions: c.collisions,
-                    self_collisions: c.self_collisions,
-                    fallen: state.sim.fallen(),
-                    moves: c.moves,
-                }
-            };
-            async move { Ok(reply) }
-        }})
+                let reply = {
+                    let state = s.lock();
+                    let c = state.sim.counters();
+                    LeggedStatusReply {
+                        clock_s: state.sim.clock_s(),
+                        falls: c.falls,
+                        collisions: c.collisions,
+                        self_collisions: c.self_collisions,
+                        fallen: state.sim.fallen(),
+                        moves: c.moves,
+                    }
+                };
+                async move { Ok(reply) }
+            }
+        })
         .connect(connector)
         .await?;
     if (config.telemetry_hz.is_some() || config.speed.is_some())

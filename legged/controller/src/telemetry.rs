@@ -224,7 +224,8 @@ mod tests {
 
     fn sim() -> LeggedSim {
         let model = Arc::new(RobotModel::builtin("hexapod").unwrap());
-        let ground = Arc::new(HeightField::flat(P2::new(-2.0, -2.0), P2::new(2.0, 2.0), 0.02, 0.0).unwrap());
+        let ground =
+            Arc::new(HeightField::flat(P2::new(-2.0, -2.0), P2::new(2.0, 2.0), 0.02, 0.0).unwrap());
         let params = SimParams::for_model(&model);
         LeggedSim::new(
             model,
@@ -247,11 +248,19 @@ mod tests {
         assert_eq!(t.seq, 7);
         assert_eq!(t.t_s, sim.clock_s());
         assert_eq!(t.body, isometry_to_pose(&sim.body()));
-        assert!((t.margin_m - sim.margin()).abs() < 1e-9, "{} vs {}", t.margin_m, sim.margin());
+        assert!(
+            (t.margin_m - sim.margin()).abs() < 1e-9,
+            "{} vs {}",
+            t.margin_m,
+            sim.margin()
+        );
         let com = sim.centre_of_mass();
         assert!((t.com.x_m - com.x).abs() < 1e-9 && (t.com.z_m - com.z).abs() < 1e-9);
         let total: f64 = t.legs.iter().map(|l| l.force_n).sum();
-        assert!((total - model.total_mass() * G).abs() < 1e-6, "forces add up to the weight");
+        assert!(
+            (total - model.total_mass() * G).abs() < 1e-6,
+            "forces add up to the weight"
+        );
         for (i, l) in t.legs.iter().enumerate() {
             let s = sim.leg_state(&l.leg).unwrap();
             assert_eq!(l.joints, s.joints);

@@ -13,8 +13,8 @@ use tca_bridge::{
     BridgeConfig, DelayStats, NamePattern, PlaybackOptions, PlaybackReport, Recorded, end_to_end,
 };
 use tca_central::{RunningCentral, StartOptions};
-use tca_legged_walk::walk::{LeggedWalkOptions, prepare};
 use tca_legged_walk::LeggedTerrain;
+use tca_legged_walk::walk::{LeggedWalkOptions, prepare};
 use tca_module::{Connector, Module};
 use tokio::sync::mpsc;
 
@@ -144,11 +144,15 @@ pub async fn demo(
     options: &DemoOptions,
     progress: impl Fn(&StepRecord),
 ) -> Result<DemoReport, GroundError> {
-    std::fs::create_dir_all(&options.out).map_err(|e| {
-        GroundError::Setup(format!("cannot create {}: {e}", options.out.display()))
-    })?;
-    let files = ["robot.mcap", "ground.mcap", "bridge.mcap", "telemetry.jsonl"]
-        .map(|f| options.out.join(f));
+    std::fs::create_dir_all(&options.out)
+        .map_err(|e| GroundError::Setup(format!("cannot create {}: {e}", options.out.display())))?;
+    let files = [
+        "robot.mcap",
+        "ground.mcap",
+        "bridge.mcap",
+        "telemetry.jsonl",
+    ]
+    .map(|f| options.out.join(f));
     for f in &files[..3] {
         // A fresh session each run.
         let _ = std::fs::remove_file(f);
@@ -197,11 +201,10 @@ pub async fn demo(
         ..options.session.clone()
     };
     let session = run_session(&operator, &session_options, progress).await;
-    // The last move's telemetry comes down before the bridge stops.
-    tokio::time::sleep(options.down_delay + Duration::from_secs_f64(2.0 / options.telemetry_hz))
-        .await;
-    operator.close().await;
+    // No more telemetry; what is on its way comes down before the bridge stops.
     controller.close().await;
+    tokio::time::sleep(options.down_delay + Duration::from_millis(200)).await;
+    operator.close().await;
     bridge.stop().await;
     monitor.close().await;
     let live = drain(&mut live);
@@ -255,6 +258,7 @@ pub async fn replay(
             ground: connector,
             speed,
             name: None,
+            linger: Duration::ZERO,
         },
     )
     .await?;

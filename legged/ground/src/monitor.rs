@@ -129,7 +129,10 @@ pub async fn connect_monitor(
                         telemetry: t.clone(),
                     });
                 }
-                let _ = tx.send(Received { at_ns, telemetry: t });
+                let _ = tx.send(Received {
+                    at_ns,
+                    telemetry: t,
+                });
                 async { Ok(()) }
             }
         })

@@ -98,9 +98,10 @@ pub fn plan_steps(
     }
     let mut joints: Vec<Vec<f64>> = Vec::with_capacity(legs.len());
     for leg in legs {
-        let state = states.iter().find(|s| s.leg == leg.name()).ok_or_else(|| {
-            GroundError::Setup(format!("no state came for leg {}", leg.name()))
-        })?;
+        let state = states
+            .iter()
+            .find(|s| s.leg == leg.name())
+            .ok_or_else(|| GroundError::Setup(format!("no state came for leg {}", leg.name())))?;
         joints.push(state.joints.clone());
     }
     let mut moves = Vec::with_capacity(options.steps);
@@ -114,7 +115,9 @@ pub fn plan_steps(
             -options.stride_m
         };
         let q = &joints[i];
-        let foot = leg.foot_position(q).map_err(|e| GroundError::Setup(e.to_string()))?;
+        let foot = leg
+            .foot_position(q)
+            .map_err(|e| GroundError::Setup(e.to_string()))?;
         let solve = |target: Point3<f64>, from: &[f64]| {
             leg.inverse_kinematics(&target, &IkOptions::starting_at(from))
                 .map(|s| s.joints)
@@ -160,9 +163,14 @@ pub async fn run_session(
     let model = RobotModel::from_urdf_str(&description.urdf)
         .map_err(|e| GroundError::Setup(format!("the robot's description: {e}")))?;
     // One round trip for every leg's state.
-    let asks = description.legs.iter().map(|leg| {
-        operator.query_with_timeout(&LegState { leg: leg.clone() }, options.query_timeout)
-    });
+    let queries: Vec<LegState> = description
+        .legs
+        .iter()
+        .map(|leg| LegState { leg: leg.clone() })
+        .collect();
+    let asks = queries
+        .iter()
+        .map(|q| operator.query_with_timeout(q, options.query_timeout));
     let mut states = Vec::new();
     for s in futures::future::join_all(asks).await {
         states.push(s?);

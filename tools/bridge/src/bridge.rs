@@ -7,7 +7,7 @@
 //! command is carried out (see [`crate::forward`]).
 
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicI64, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicI64, AtomicU32, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock, Weak};
 use std::time::Duration;
 
@@ -62,6 +62,8 @@ pub(crate) struct Carried {
     pub(crate) carry: Option<tca_messages::MessageId>,
     /// The carried message's id there, once sent.
     pub(crate) child: Option<tca_messages::MessageId>,
+    /// The carry's node there (exceptions raised under it cross until its outcome has).
+    pub(crate) node: Option<(Side, NodeId)>,
 }
 
 /// What both sides share.
@@ -76,6 +78,8 @@ pub(crate) struct Core {
     pub(crate) handlers: HashMap<MessageName, ModuleName>,
     next: AtomicU32,
     lines: [DelayLine; 2],
+    /// Set when the bridge stops: the lines release nothing more.
+    stopped: AtomicBool,
     /// Crossings in each line now.
     in_line: [AtomicI64; 2],
     pub(crate) waiting: Mutex<HashMap<u32, Waiting>>,
@@ -196,6 +200,7 @@ impl RunningBridge {
     /// Says goodbye to both centrals, closes the log and tells what was done. Crossings
     /// still in the delay lines are not forwarded.
     pub async fn stop(self) -> Summary {
+        self.core.stopped.store(true, Ordering::Relaxed);
         let summary = self.summary();
         for side in Side::BOTH {
             if let Some(m) = self.core.half(side) {
@@ -248,6 +253,7 @@ impl RunningBridge {
 
 impl Drop for RunningBridge {
     fn drop(&mut self) {
+        self.core.stopped.store(true, Ordering::Relaxed);
         for t in &self.tasks {
             t.abort();
         }
@@ -280,7 +286,6 @@ pub async fn start(config: BridgeConfig) -> Result<RunningBridge> {
     let forwarded = found?;
     let log = config.log.as_deref().map(BridgeLog::create).transpose()?;
 
-    let (ready_tx, ready) = watch::channel(false);
     let mut exceptions: [Vec<MessageName>; 2] = [Vec::new(), Vec::new()];
     for f in forwarded.iter().filter(|f| f.class() == Class::Exception) {
         exceptions[f.direction.from().index()].push(f.name().clone());
@@ -292,22 +297,7 @@ pub async fn start(config: BridgeConfig) -> Result<RunningBridge> {
     let carry = MessageName::new(format!("{}.carry", config.name))
         .map_err(|e| BridgeError::Config(format!("the bridge's name: {e}")))?;
     let mut tasks = Vec::new();
-    let core = Arc::new_cyclic(|weak: &Weak<Core>| {
-        let lines = Direction::BOTH.map(|d| {
-            let weak = weak.clone();
-            let (line, task) = DelayLine::start(config.delay(d), ready.clone(), move |c| {
-                match weak.upgrade() {
-                    Some(core) => {
-                        core.dequeued(c.direction);
-                        core.release(c);
-                        true
-                    }
-                    None => false,
-                }
-            });
-            tasks.push(task);
-            line
-        });
+    let core = Arc::new({
         Core {
             name: name.clone(),
             carry,
@@ -316,7 +306,8 @@ pub async fn start(config: BridgeConfig) -> Result<RunningBridge> {
             exceptions,
             handlers,
             next: AtomicU32::new(1),
-            lines,
+            lines: Direction::BOTH.map(|d| DelayLine::new(config.delay(d))),
+            stopped: AtomicBool::new(false),
             in_line: [AtomicI64::new(0), AtomicI64::new(0)],
             waiting: Mutex::new(HashMap::new()),
             carried: Mutex::new(HashMap::new()),
@@ -343,7 +334,24 @@ pub async fn start(config: BridgeConfig) -> Result<RunningBridge> {
             }
         }
     }
-    ready_tx.send_replace(true);
+    // Both sides joined: the lines start releasing (what came meanwhile waited in them).
+    for d in Direction::BOTH {
+        let weak = Arc::downgrade(&core);
+        core.lines[d.index()]
+            .run(
+                &format!("bridge-{d}"),
+                tokio::runtime::Handle::current(),
+                move |c| match weak.upgrade() {
+                    Some(core) if !core.stopped.load(Ordering::Relaxed) => {
+                        core.dequeued(c.direction);
+                        core.release(c);
+                        true
+                    }
+                    _ => false,
+                },
+            )
+            .map_err(|e| BridgeError::Connect(format!("cannot start the {d} delay line: {e}")))?;
+    }
     let (closed_tx, closed) = watch::channel(None);
     let closed_tx = Arc::new(closed_tx);
     for side in Side::BOTH {
@@ -356,11 +364,6 @@ pub async fn start(config: BridgeConfig) -> Result<RunningBridge> {
             )));
         }
     }
-    // The lines end with the core; keep the sender of `ready` as long.
-    tasks.push(tokio::spawn(async move {
-        let _ready = ready_tx;
-        std::future::pending::<()>().await;
-    }));
     for f in &forwarded {
         tracing::info!(name = %f.name(), class = %f.class(), way = %f.direction, "forwarded");
     }

@@ -8,12 +8,12 @@
 
 use std::time::Duration;
 
+use std::sync::{Mutex, mpsc};
+use std::time::Instant;
 use tca_messages::control::{KillTask, names};
 use tca_messages::{
     Class, Envelope, Failure, MessageId, MessageName, ModuleName, SendOptions, encode_data,
 };
-use tokio::sync::{mpsc, watch};
-use tokio::time::Instant;
 
 use crate::side::Direction;
 
@@ -139,7 +139,8 @@ impl Payload {
                 let kill = KillTask {
                     task: crossing_id(*task),
                 };
-                let name = MessageName::new(names::KILL_TASK).unwrap_or_else(|_| self.name().clone());
+                let name =
+                    MessageName::new(names::KILL_TASK).unwrap_or_else(|_| self.name().clone());
                 return (name, encode_data(&kill).unwrap_or_default());
             }
         };
@@ -175,33 +176,53 @@ impl Crossing {
 }
 
 /// One way's delay line: crossings go in, and each comes out its delay after it went in.
+///
+/// The line releases on a thread of its own, which sleeps on the operating system's clock:
+/// a crossing leaves on time however busy the async runtime is with everything else.
 pub(crate) struct DelayLine {
-    tx: mpsc::UnboundedSender<(Instant, Crossing)>,
+    tx: mpsc::Sender<(Instant, Crossing)>,
+    rx: Mutex<Option<mpsc::Receiver<(Instant, Crossing)>>>,
     delay: Duration,
 }
 
 impl DelayLine {
-    /// Starts a line with `delay` that hands each crossing to `release` when its time has
-    /// come, once `ready` turns true (crossings taken before wait until then). The line
-    /// ends when it is dropped, or when `release` returns false.
-    pub(crate) fn start(
-        delay: Duration,
-        mut ready: watch::Receiver<bool>,
-        release: impl Fn(Crossing) -> bool + Send + 'static,
-    ) -> (DelayLine, tokio::task::JoinHandle<()>) {
-        let (tx, mut rx) = mpsc::unbounded_channel::<(Instant, Crossing)>();
-        let task = tokio::spawn(async move {
-            if ready.wait_for(|r| *r).await.is_err() {
-                return;
-            }
-            while let Some((due, crossing)) = rx.recv().await {
-                tokio::time::sleep_until(due).await;
-                if !release(crossing) {
-                    return;
+    /// A line with `delay`; crossings taken wait in it until it [`runs`](Self::run).
+    pub(crate) fn new(delay: Duration) -> Self {
+        let (tx, rx) = mpsc::channel();
+        DelayLine {
+            tx,
+            rx: Mutex::new(Some(rx)),
+            delay,
+        }
+    }
+
+    /// Starts handing each crossing to `release` when its time has come, on a thread named
+    /// `name` with `runtime` entered (so `release` may spawn tasks). The thread ends when the
+    /// line is dropped, or when `release` returns false. A line runs once.
+    pub(crate) fn run(
+        &self,
+        name: &str,
+        runtime: tokio::runtime::Handle,
+        mut release: impl FnMut(Crossing) -> bool + Send + 'static,
+    ) -> std::io::Result<()> {
+        let Some(rx) = self.rx.lock().unwrap_or_else(|p| p.into_inner()).take() else {
+            return Ok(());
+        };
+        std::thread::Builder::new()
+            .name(name.to_owned())
+            .spawn(move || {
+                let _runtime = runtime.enter();
+                while let Ok((due, crossing)) = rx.recv() {
+                    let now = Instant::now();
+                    if due > now {
+                        std::thread::sleep(due - now);
+                    }
+                    if !release(crossing) {
+                        return;
+                    }
                 }
-            }
-        });
-        (DelayLine { tx, delay }, task)
+            })
+            .map(|_| ())
     }
 
     /// Takes a crossing: it comes out the line's delay after it was received.
@@ -229,25 +250,31 @@ mod tests {
         }
     }
 
-    #[tokio::test(start_paused = true)]
+    #[tokio::test]
     async fn a_line_releases_each_crossing_its_delay_after_it_came_in_order() {
-        let (ready_tx, ready) = watch::channel(false);
-        let (out_tx, mut out) = mpsc::unbounded_channel();
-        let (line, _task) = DelayLine::start(Duration::from_millis(1300), ready, move |c| {
-            out_tx.send((c.id, Instant::now())).is_ok()
-        });
+        let (out_tx, out) = mpsc::channel();
+        let line = DelayLine::new(Duration::from_millis(300));
         let t0 = Instant::now();
         line.take(inform(1, t0));
-        tokio::time::sleep(Duration::from_millis(100)).await;
-        line.take(inform(2, Instant::now()));
-        // Nothing leaves before the line is ready.
-        tokio::time::sleep(Duration::from_millis(50)).await;
-        ready_tx.send_replace(true);
-        let (a, at_a) = out.recv().await.unwrap();
-        let (b, at_b) = out.recv().await.unwrap();
+        line.take(inform(2, t0 + Duration::from_millis(100)));
+        // Nothing leaves before the line runs.
+        std::thread::sleep(Duration::from_millis(50));
+        line.run("test-line", tokio::runtime::Handle::current(), move |c| {
+            out_tx.send((c.id, Instant::now())).is_ok()
+        })
+        .unwrap();
+        let (a, at_a) = out.recv().unwrap();
+        let (b, at_b) = out.recv().unwrap();
         assert_eq!((a, b), (1, 2));
-        assert_eq!(at_a - t0, Duration::from_millis(1300));
-        assert_eq!(at_b - t0, Duration::from_millis(1400));
+        let (da, db) = (at_a - t0, at_b - t0);
+        assert!(
+            da >= Duration::from_millis(300) && da < Duration::from_millis(400),
+            "{da:?}"
+        );
+        assert!(
+            db >= Duration::from_millis(400) && db < Duration::from_millis(500),
+            "{db:?}"
+        );
     }
 
     #[test]

@@ -107,7 +107,10 @@ impl NamePattern {
             };
         }
         let name = MessageName::new(text).map_err(|e| e.to_string())?;
-        if name.as_str().starts_with(tca_messages::control::CONTROL_PREFIX) {
+        if name
+            .as_str()
+            .starts_with(tca_messages::control::CONTROL_PREFIX)
+        {
             return Err(format!(
                 "{text} is one of central's own control messages; each central keeps its own"
             ));
@@ -222,9 +225,8 @@ impl BridgeConfig {
 
     /// Checks what a file cannot check alone: a name crossing both ways, a module name.
     pub fn check(&self) -> Result<()> {
-        tca_messages::ModuleName::new(self.name.clone()).map_err(|e| {
-            BridgeError::Config(format!("the bridge's name {:?}: {e}", self.name))
-        })?;
+        tca_messages::ModuleName::new(self.name.clone())
+            .map_err(|e| BridgeError::Config(format!("the bridge's name {:?}: {e}", self.name)))?;
         for up in &self.up.messages {
             if let NamePattern::Exact(n) = up
                 && self.down.messages.iter().any(|d| d == up)
@@ -237,7 +239,12 @@ impl BridgeConfig {
         }
         for d in Direction::BOTH {
             for name in self.way(d).query_timeouts.keys() {
-                if !self.way(d).messages.iter().any(|p| p.matches(name.as_str())) {
+                if !self
+                    .way(d)
+                    .messages
+                    .iter()
+                    .any(|p| p.matches(name.as_str()))
+                {
                     return Err(BridgeError::Config(format!(
                         "[{d}] query_timeout_s names {name}, which [{d}] messages does not \
                          forward; add it to messages or remove its timeout"
@@ -379,7 +386,10 @@ mod tests {
         assert!(c.up.messages[2].matches("legged.halt"));
         assert!(!c.up.messages[2].matches("legMove2"));
         let pose = MessageName::new("pose").unwrap();
-        assert_eq!(c.query_timeout(Direction::Up, &pose), Duration::from_secs(5));
+        assert_eq!(
+            c.query_timeout(Direction::Up, &pose),
+            Duration::from_secs(5)
+        );
         let other = MessageName::new("legMove").unwrap();
         assert_eq!(
             c.query_timeout(Direction::Up, &other),
@@ -399,7 +409,11 @@ mod tests {
             .unwrap()
             .config(Some("tcp/127.0.0.1:9000"), None)
             .unwrap();
-        assert!(c.robot.describe().ends_with("at tcp/127.0.0.1:9000"), "{}", c.robot.describe());
+        assert!(
+            c.robot.describe().ends_with("at tcp/127.0.0.1:9000"),
+            "{}",
+            c.robot.describe()
+        );
     }
 
     #[test]

@@ -33,7 +33,6 @@ use tca_messages::control::TaskOutcome;
 use tca_messages::{Class, MessageId, MessageName, ModuleName, decode_data, encode_data, now_ns};
 use tca_module::{Context, HandlerError, Module, ModuleError};
 use tokio::sync::oneshot;
-use tokio::time::Instant;
 
 use crate::bridge::{Carried, Carry, Core, Waiting, lock};
 use crate::crossing::{Answer, Crossing, Payload};
@@ -60,7 +59,7 @@ impl Core {
             id,
             direction,
             sender,
-            received: Instant::now(),
+            received: std::time::Instant::now(),
             received_ns: now_ns(),
             payload,
         };
@@ -98,9 +97,12 @@ impl Core {
 
     /// Sends request `request`'s answer back the way it came.
     fn answer(&self, request: &Crossing, answer: Answer) {
-        let child = lock(&self.carried)
-            .remove(&request.id)
-            .and_then(|k| k.child);
+        let carried = lock(&self.carried).remove(&request.id);
+        // An exception raised in the task can still come until now (see `carry`).
+        if let Some(key) = carried.as_ref().and_then(|k| k.node) {
+            lock(&self.carry_nodes).remove(&key);
+        }
+        let child = carried.and_then(|k| k.child);
         let name = request.payload.name().clone();
         let sender = self
             .handlers
@@ -128,7 +130,10 @@ impl Core {
                 "{} could not be handed to the {to} side: the bridge is not joined to it",
                 crossing.payload.name()
             );
-            if matches!(crossing.payload, Payload::Task { .. } | Payload::Query { .. }) {
+            if matches!(
+                crossing.payload,
+                Payload::Task { .. } | Payload::Query { .. }
+            ) {
                 self.answer(&crossing, Answer::Failed(text));
             } else {
                 self.problem(Some(to), text);
@@ -138,6 +143,7 @@ impl Core {
         match &crossing.payload {
             Payload::Task { .. } => self.release_task(half, crossing),
             Payload::Query { .. } => {
+                self.released(&crossing, None);
                 tokio::spawn(self.clone().release_query(half, crossing));
             }
             Payload::Inform { name, data } => {
@@ -218,6 +224,7 @@ impl Core {
                 crossing: crossing.clone(),
                 carry: None,
                 child: None,
+                node: None,
             },
         );
         match half.send_watched_raw(Class::Goal, self.carry.as_str(), data, []) {
@@ -247,7 +254,8 @@ impl Core {
         }
     }
 
-    /// Asks a query with its own timeout; the answer crosses back.
+    /// Asks a query with its own timeout (it was handed over just before); the answer
+    /// crosses back.
     async fn release_query(self: Arc<Self>, half: Module, crossing: Crossing) {
         let Payload::Query {
             name,
@@ -258,7 +266,6 @@ impl Core {
             return;
         };
         let to = crossing.direction.to();
-        self.released(&crossing, None);
         let answer = match half
             .query_raw(name.as_str(), data.clone(), Some(*timeout))
             .await
@@ -291,7 +298,13 @@ pub(crate) async fn forward(
     let cause = Some(ctx.message_id());
     match class {
         Class::Inform => {
-            c.cross(c.next_id(), direction, sender, cause, Payload::Inform { name, data });
+            c.cross(
+                c.next_id(),
+                direction,
+                sender,
+                cause,
+                Payload::Inform { name, data },
+            );
             Ok(Vec::new())
         }
         Class::Exception => {
@@ -318,7 +331,10 @@ pub(crate) async fn forward(
             let rx = c.wait_answer(id, &ctx);
             let within = c.config.answer_within(direction, &name);
             let timeout = c.config.query_timeout(direction, &name);
-            let (up, down) = (c.config.delay(direction), c.config.delay(direction.reverse()));
+            let (up, down) = (
+                c.config.delay(direction),
+                c.config.delay(direction.reverse()),
+            );
             c.cross(
                 id,
                 direction,
@@ -444,20 +460,6 @@ impl Drop for KillOnDrop {
     }
 }
 
-/// Forgets a carry's node when its handler ends.
-struct ForgetNode {
-    core: Weak<Core>,
-    key: Option<(Side, tca_messages::NodeId)>,
-}
-
-impl Drop for ForgetNode {
-    fn drop(&mut self) {
-        if let (Some(core), Some(key)) = (self.core.upgrade(), self.key) {
-            lock(&core.carry_nodes).remove(&key);
-        }
-    }
-}
-
 /// The handler of `NAME.carry` on `side`: carries out a forwarded goal or command as its
 /// child and ends as the child ends.
 pub(crate) async fn carry(core: Weak<Core>, side: Side, ctx: Context, data: Vec<u8>) -> Handled {
@@ -491,10 +493,6 @@ pub(crate) async fn carry(core: Weak<Core>, side: Side, ctx: Context, data: Vec<
         )));
     };
     let node = ctx.node();
-    let _forget = ForgetNode {
-        core: core.clone(),
-        key: node.map(|n| (side, n)),
-    };
     if let Some(node) = node {
         let exceptions = &c.exceptions[side.index()];
         // One round trip for all: the attachments go out in order, before the child.
@@ -510,16 +508,28 @@ pub(crate) async fn carry(core: Weak<Core>, side: Side, ctx: Context, data: Vec<
             }
         }
         lock(&c.carry_nodes).insert((side, node), crossing.id);
+        if let Some(k) = lock(&c.carried).get_mut(&crossing.id) {
+            k.node = Some((side, node));
+        }
     }
     let child = ctx
         .send_watched_raw(*class, name.as_str(), data.clone(), [])
-        .map_err(|e| HandlerError::new(format!("{name} could not be sent on the {side} side: {e}")))?;
+        .map_err(|e| {
+            HandlerError::new(format!("{name} could not be sent on the {side} side: {e}"))
+        })?;
     if let Some(k) = lock(&c.carried).get_mut(&crossing.id) {
         k.child = Some(child.id());
     }
     c.released(&crossing, Some(child.id()));
     drop(c);
-    match child.outcome().await {
+    let outcome = child.outcome().await;
+    if !matches!(outcome, Ok(TaskOutcome::Achieved)) {
+        // Central tells a node's failure at once, even while an exception raised in it is
+        // still on its way to the bridge: let the handler of one already delivered run
+        // first (it finds the carry until its outcome has crossed, see `Core::answer`).
+        tokio::task::yield_now().await;
+    }
+    match outcome {
         Ok(TaskOutcome::Achieved) => Ok(Vec::new()),
         Ok(TaskOutcome::Failed(reason)) => Err(HandlerError::new(reason)),
         Ok(TaskOutcome::Killed) => Err(HandlerError::new(format!(

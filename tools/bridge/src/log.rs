@@ -131,11 +131,7 @@ impl BridgeLog {
 
     /// Writes what is queued and closes the file.
     pub(crate) fn finish(&self) {
-        let sink = self
-            .sink
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .take();
+        let sink = self.sink.lock().unwrap_or_else(|p| p.into_inner()).take();
         if let Some(sink) = sink
             && let Err(e) = sink.finish()
         {

@@ -11,7 +11,8 @@
 //!   that name, and answered as it was then: the recorded reply, success or failure, the
 //!   recorded exceptions raised in its context on the way, each after the time it took in the
 //!   recorded session. One sent more often than recorded fails, saying so; one whose data
-//!   differs from the recording is answered all the same and counted.
+//!   differs from the recording is answered all the same and counted. After the timeline the
+//!   player stays (at most a set time) until every recorded request was sent again.
 
 use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::sync::{Arc, Mutex};
@@ -36,6 +37,9 @@ pub struct PlaybackOptions {
     pub speed: f64,
     /// The module name to play under (default: the recorded bridge's name).
     pub name: Option<String>,
+    /// After the timeline, how long to stay for requests of the recording the ground side
+    /// has not sent yet (the player leaves as soon as every recorded request was asked).
+    pub linger: Duration,
 }
 
 /// What a playback did.
@@ -143,16 +147,27 @@ pub async fn play(recorded: &Recorded, options: PlaybackOptions) -> Result<Playb
                     informs += 1;
                 }
             }
-            Err(e) => tracing::warn!(name = %c.name, error = %e, "a recorded message could not be played back"),
+            Err(e) => {
+                tracing::warn!(name = %c.name, error = %e, "a recorded message could not be played back")
+            }
         }
     }
-    // Requests taken meanwhile finish before the player leaves.
+    // The ground side may still send what the recording has; requests taken finish before
+    // the player leaves.
+    let lingering = Instant::now() + options.linger;
     loop {
         let finished = {
             let s = lock(&stats);
             s.answered + s.unmatched
         };
-        if finished >= lock(&scripts).taken {
+        let (taken, left) = {
+            let s = lock(&scripts);
+            (
+                s.taken,
+                s.by_name.values().map(VecDeque::len).sum::<usize>(),
+            )
+        };
+        if finished >= taken && (left == 0 || Instant::now() >= lingering) {
             break;
         }
         tokio::time::sleep(Duration::from_millis(20)).await;
@@ -198,7 +213,9 @@ fn scripts(recorded: &Recorded) -> Scripts {
             let Some(out) = r.out_ns else { continue };
             let after = out.saturating_sub(asked_ns);
             match r.class {
-                Class::Exception => script.exceptions.push((after, r.name.clone(), r.data.clone())),
+                Class::Exception => script
+                    .exceptions
+                    .push((after, r.name.clone(), r.data.clone())),
                 Class::Reply | Class::Success | Class::Failure => {
                     script.answer = Some((after, r.class, r.data.clone()));
                 }

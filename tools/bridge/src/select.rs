@@ -112,7 +112,10 @@ pub(crate) fn select(
 /// Asks both sides' registries (through `probes`, robot's then ground's) until every exact
 /// name is registered on the side that handles it, at most `config.wait`; then returns what
 /// is forwarded.
-pub(crate) async fn wait_for(config: &BridgeConfig, probes: [&Module; 2]) -> Result<Vec<Forwarded>> {
+pub(crate) async fn wait_for(
+    config: &BridgeConfig,
+    probes: [&Module; 2],
+) -> Result<Vec<Forwarded>> {
     let started = tokio::time::Instant::now();
     let mut said = started;
     loop {
@@ -135,10 +138,7 @@ pub(crate) async fn wait_for(config: &BridgeConfig, probes: [&Module; 2]) -> Res
         }
         if said.elapsed() >= SAY_EVERY {
             said = tokio::time::Instant::now();
-            tracing::warn!(
-                "the bridge waits: {}",
-                describe_missing(&missing, waited)
-            );
+            tracing::warn!("the bridge waits: {}", describe_missing(&missing, waited));
         }
         tokio::time::sleep(POLL).await;
     }
@@ -190,7 +190,10 @@ mod tests {
 
     fn config(text: &str) -> BridgeConfig {
         let text = format!("robot = \"tcp/a:1\"\nground = \"tcp/b:1\"\n{text}");
-        BridgeFile::parse(&text).unwrap().config(None, None).unwrap()
+        BridgeFile::parse(&text)
+            .unwrap()
+            .config(None, None)
+            .unwrap()
     }
 
     #[test]
@@ -222,7 +225,10 @@ mod tests {
             .map(|f| f.name().as_str())
             .collect();
         assert_eq!(down, ["telemetry"]);
-        assert_eq!(missing, vec![(Direction::Down, MessageName::new("missing").unwrap())]);
+        assert_eq!(
+            missing,
+            vec![(Direction::Down, MessageName::new("missing").unwrap())]
+        );
         let text = describe_missing(&missing, Duration::from_secs(3));
         assert!(
             text.contains("the ground side's central has no handler for missing"),
