@@ -15,12 +15,15 @@
 //!
 //! [down]                           # sent on the robot side, handled on the ground side
 //! delay_s = 1.3
-//! messages = ["legged.telemetry", "legged.moveFailed"]
+//! messages = ["legged.telemetry"]
+//! optional = ["legged.moveFailed"]
 //! ```
 //!
 //! A message is named by its exact name, which the bridge waits for (until `wait_s`), or by
 //! a pattern (`*` any run of characters, `?` one), which takes whatever the handling side has
-//! registered when the bridge starts. Every class crosses: queries (their replies come back),
+//! registered when the bridge starts; `optional = [...]` beside `messages` names what is
+//! taken if it is there when the bridge starts, and not waited for (exceptions that only
+//! some ground tools handle, for example). Every class crosses: queries (their replies come back),
 //! goals and commands (their success or failure comes back), informs, and exceptions raised
 //! inside a forwarded goal or command.
 
@@ -77,6 +80,10 @@ pub struct Way {
     /// Message names or patterns.
     #[serde(default)]
     pub messages: Vec<String>,
+    /// Names or patterns taken when the handling side has them as the bridge starts, not
+    /// waited for.
+    #[serde(default)]
+    pub optional: Vec<String>,
     /// Own timeouts of some queries, seconds.
     #[serde(default)]
     pub query_timeout_s: BTreeMap<String, f64>,
@@ -162,8 +169,10 @@ pub struct BridgeConfig {
 pub struct WayConfig {
     /// Added to everything crossing this way.
     pub delay: Duration,
-    /// What crosses.
+    /// What crosses (exact names are waited for).
     pub messages: Vec<NamePattern>,
+    /// What crosses if the handling side has it when the bridge starts.
+    pub optional: Vec<NamePattern>,
     /// Own timeouts of some queries.
     pub query_timeouts: BTreeMap<MessageName, Duration>,
 }
@@ -227,9 +236,13 @@ impl BridgeConfig {
     pub fn check(&self) -> Result<()> {
         tca_messages::ModuleName::new(self.name.clone())
             .map_err(|e| BridgeError::Config(format!("the bridge's name {:?}: {e}", self.name)))?;
-        for up in &self.up.messages {
+        let all = |w: &WayConfig| -> Vec<NamePattern> {
+            w.messages.iter().chain(&w.optional).cloned().collect()
+        };
+        let down = all(&self.down);
+        for up in &all(&self.up) {
             if let NamePattern::Exact(n) = up
-                && self.down.messages.iter().any(|d| d == up)
+                && down.contains(up)
             {
                 return Err(BridgeError::Config(format!(
                     "{n} is named both [up] and [down]; a message crosses one way (its answers \
@@ -316,6 +329,13 @@ impl BridgeFile {
                     .map_err(|e| BridgeError::Config(format!("[{d}] messages: {e}")))?;
                 if !c.messages.contains(&p) {
                     c.messages.push(p);
+                }
+            }
+            for m in &way.optional {
+                let p = NamePattern::parse(m)
+                    .map_err(|e| BridgeError::Config(format!("[{d}] optional: {e}")))?;
+                if !c.optional.contains(&p) {
+                    c.optional.push(p);
                 }
             }
             for (name, t) in &way.query_timeout_s {

@@ -61,7 +61,9 @@ pub(crate) fn select(
     let mut missing = Vec::new();
     for d in Direction::BOTH {
         let registry = registries[d.to().index()];
-        for pattern in &config.way(d).messages {
+        let way = config.way(d);
+        let required = way.messages.iter().map(|p| (p, true));
+        for (pattern, required) in required.chain(way.optional.iter().map(|p| (p, false))) {
             let matching: Vec<&RegistryEntry> = registry
                 .entries
                 .iter()
@@ -70,6 +72,7 @@ pub(crate) fn select(
                 .filter(|e| e.class.is_handled())
                 .collect();
             if matching.is_empty()
+                && required
                 && let NamePattern::Exact(name) = pattern
             {
                 missing.push((d, name.clone()));
@@ -199,7 +202,7 @@ mod tests {
     #[test]
     fn names_are_looked_up_on_the_side_that_handles_them() {
         let c = config(
-            "[up]\nmessages = [\"legged.*\", \"pose\"]\n[down]\nmessages = [\"telemetry\", \"missing\"]",
+            "[up]\nmessages = [\"legged.*\", \"pose\"]\n[down]\nmessages = [\"telemetry\", \"missing\"]\noptional = [\"absent\", \"fault\"]",
         );
         let robot = registry(vec![
             entry("legged.legMove", Class::Command, "controller"),
@@ -210,6 +213,7 @@ mod tests {
         ]);
         let ground = registry(vec![
             entry("telemetry", Class::Inform, "monitor"),
+            entry("fault", Class::Exception, "walker"),
             entry("legged.legMove", Class::Command, "bridge"),
         ]);
         let (found, missing) = select(&c, [&robot, &ground]).unwrap();
@@ -224,7 +228,7 @@ mod tests {
             .filter(|f| f.direction == Direction::Down)
             .map(|f| f.name().as_str())
             .collect();
-        assert_eq!(down, ["telemetry"]);
+        assert_eq!(down, ["fault", "telemetry"]);
         assert_eq!(
             missing,
             vec![(Direction::Down, MessageName::new("missing").unwrap())]

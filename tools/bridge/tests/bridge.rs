@@ -339,7 +339,6 @@ async fn an_exception_raised_on_the_robot_reaches_the_grounds_handler() {
         );
     };
     assert_eq!(failed.detail, "no ground under the foot");
-    // It came before the outcome, in the walk's context: the walk failed after handling it.
     // A walk whose move succeeds is achieved, with no exception.
     let outcome = within(
         "a walk",
