@@ -13,7 +13,7 @@ use tca_logs::{Direction as Way, LogFile, RecordKind};
 use tca_messages::{Class, MessageId};
 
 use crate::recorded::{Recorded, RecordedCrossing};
-use crate::side::{Direction, Side};
+use crate::side::Side;
 use crate::stats::DelayStats;
 
 /// When each message reached one central: by its id, and (for answers) by the id it answers.
@@ -76,21 +76,12 @@ fn delay(c: &RecordedCrossing, logs: &[Arrivals; 2]) -> Option<f64> {
 pub fn end_to_end(recorded: &Recorded, robot: &LogFile, ground: &LogFile) -> Vec<DelayStats> {
     let logs = [Arrivals::of(robot), Arrivals::of(ground)];
     debug_assert_eq!(Side::Robot.index(), 0);
-    let (up, down) = recorded.delays_s.unwrap_or((0.0, 0.0));
-    Direction::BOTH
-        .iter()
-        .map(|&d| {
-            let delays: Vec<f64> = recorded
-                .crossings
-                .values()
-                .filter(|c| c.direction == d)
-                .filter_map(|c| delay(c, &logs))
-                .collect();
-            let setting = match d {
-                Direction::Up => up,
-                Direction::Down => down,
-            };
-            DelayStats::of(d, setting, &delays)
-        })
-        .collect()
+    DelayStats::both_ways(recorded.delays_s.unwrap_or((0.0, 0.0)), |d| {
+        recorded
+            .crossings
+            .values()
+            .filter(|c| c.direction == d)
+            .filter_map(|c| delay(c, &logs))
+            .collect()
+    })
 }

@@ -159,23 +159,13 @@ impl Recorded {
 
     /// The delays measured each way (up, down) against the recorded settings.
     pub fn delay_stats(&self) -> Vec<DelayStats> {
-        let (up, down) = self.delays_s.unwrap_or((0.0, 0.0));
-        Direction::BOTH
-            .iter()
-            .map(|&d| {
-                let delays: Vec<f64> = self
-                    .crossings
-                    .values()
-                    .filter(|c| c.direction == d)
-                    .filter_map(RecordedCrossing::delay_s)
-                    .collect();
-                let setting = match d {
-                    Direction::Up => up,
-                    Direction::Down => down,
-                };
-                DelayStats::of(d, setting, &delays)
-            })
-            .collect()
+        DelayStats::both_ways(self.delays_s.unwrap_or((0.0, 0.0)), |d| {
+            self.crossings
+                .values()
+                .filter(|c| c.direction == d)
+                .filter_map(RecordedCrossing::delay_s)
+                .collect()
+        })
     }
 
     /// Crossings of one message name, one way, in order.

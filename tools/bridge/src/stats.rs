@@ -45,6 +45,24 @@ impl DelayStats {
         }
     }
 
+    /// Both ways (up, down) against `settings_s` (up, down): `delays_s` gives each way's
+    /// measured delays, seconds.
+    pub fn both_ways(
+        settings_s: (f64, f64),
+        mut delays_s: impl FnMut(Direction) -> Vec<f64>,
+    ) -> Vec<Self> {
+        Direction::BOTH
+            .iter()
+            .map(|&d| {
+                let setting = match d {
+                    Direction::Up => settings_s.0,
+                    Direction::Down => settings_s.1,
+                };
+                DelayStats::of(d, setting, &delays_s(d))
+            })
+            .collect()
+    }
+
     /// One line for people: `up (1.300 s): 20 crossings, error min +0.4 / median +1.1 / max +2.9 ms`.
     pub fn line(&self) -> String {
         if self.crossings == 0 {

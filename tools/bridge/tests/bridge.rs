@@ -59,6 +59,16 @@ struct RobotLog {
     cancelled: Vec<i32>,
 }
 
+/// Waits until what the robot side saw passes `check`.
+async fn robot_saw(log: &Mutex<RobotLog>, what: &str, check: impl Fn(&RobotLog) -> bool) {
+    within(what, async {
+        while !check(&log.lock().unwrap()) {
+            tokio::time::sleep(Duration::from_millis(5)).await;
+        }
+    })
+    .await
+}
+
 struct Cancelled(Arc<Mutex<RobotLog>>, i32, bool);
 impl Drop for Cancelled {
     fn drop(&mut self) {
@@ -360,10 +370,8 @@ async fn killing_a_task_on_the_ground_kills_its_copy_on_the_robot() {
     let b = bridge(config(&s.robot, &s.ground, 100, 100)).await;
     let task = s.operator.send_watched(&Move { x: 100 }, []).unwrap();
     let id = task.id();
-    within("the move reaches the robot", async {
-        while s.robot_log.lock().unwrap().moves.is_empty() {
-            tokio::time::sleep(Duration::from_millis(5)).await;
-        }
+    robot_saw(&s.robot_log, "the move reaches the robot", |l| {
+        !l.moves.is_empty()
     })
     .await;
     let killed_at = Instant::now();
@@ -372,10 +380,8 @@ async fn killing_a_task_on_the_ground_kills_its_copy_on_the_robot() {
         within("the outcome", task.outcome()).await.unwrap(),
         TaskOutcome::Killed
     );
-    within("the robot's move is cancelled", async {
-        while s.robot_log.lock().unwrap().cancelled.is_empty() {
-            tokio::time::sleep(Duration::from_millis(5)).await;
-        }
+    robot_saw(&s.robot_log, "the robot's move is cancelled", |l| {
+        !l.cancelled.is_empty()
     })
     .await;
     // The kill crossed up after the delay.
@@ -546,10 +552,8 @@ async fn a_task_under_way_when_the_bridge_stops_is_not_carried_out_twice() {
     let s = sides(TransportKind::InProcess).await;
     let b = bridge(config(&s.robot, &s.ground, 50, 50)).await;
     let task = s.operator.send_watched(&Move { x: 50 }, []).unwrap();
-    within("the move reaches the robot", async {
-        while s.robot_log.lock().unwrap().moves.is_empty() {
-            tokio::time::sleep(Duration::from_millis(5)).await;
-        }
+    robot_saw(&s.robot_log, "the move reaches the robot", |l| {
+        !l.moves.is_empty()
     })
     .await;
     // The bridge dies (both links drop at once)...
@@ -564,10 +568,8 @@ async fn a_task_under_way_when_the_bridge_stops_is_not_carried_out_twice() {
         other => panic!("{other:?}"),
     }
     // The robot's copy was killed with the old bridge's carry; nothing was sent twice.
-    within("the robot's move is cancelled", async {
-        while s.robot_log.lock().unwrap().cancelled.is_empty() {
-            tokio::time::sleep(Duration::from_millis(5)).await;
-        }
+    robot_saw(&s.robot_log, "the robot's move is cancelled", |l| {
+        !l.cancelled.is_empty()
     })
     .await;
     tokio::time::sleep(Duration::from_millis(200)).await;
@@ -591,10 +593,8 @@ async fn when_the_robots_central_dies_a_task_across_fails_saying_so() {
     let s = sides(TransportKind::Zenoh).await;
     let b = bridge(config(&s.robot, &s.ground, 50, 50)).await;
     let task = s.operator.send_watched(&Move { x: 100 }, []).unwrap();
-    within("the move reaches the robot", async {
-        while s.robot_log.lock().unwrap().moves.is_empty() {
-            tokio::time::sleep(Duration::from_millis(5)).await;
-        }
+    robot_saw(&s.robot_log, "the move reaches the robot", |l| {
+        !l.moves.is_empty()
     })
     .await;
     let Sides { robot, .. } = s;
