@@ -51,6 +51,9 @@ async fn ten_leg_moves_across_the_bridge_at_the_moons_distance() {
     let (robot, ground) = (free_endpoint(), free_endpoint());
     let _robot_central = spawn_tca(&["central", "--listen", &robot, "--log", &d("robot.mcap")]);
     let _ground_central = spawn_tca(&["central", "--listen", &ground, "--log", &d("ground.mcap")]);
+    // Both centrals answer before their modules start.
+    wait_for_modules(&robot, &[]).await;
+    wait_for_modules(&ground, &[]).await;
     let controller_args = [
         "module",
         "legged-controller",
@@ -166,6 +169,7 @@ async fn ten_leg_moves_across_the_bridge_at_the_moons_distance() {
     // Played back to a fresh ground side (four times as fast): the same telemetry.
     let replay_ground = free_endpoint();
     let _replay_central = spawn_tca(&["central", "--listen", &replay_ground]);
+    wait_for_modules(&replay_ground, &[]).await;
     let replay_record = d("replay.jsonl");
     let _replay_monitor = spawn_tca(&[
         "module",
