@@ -116,8 +116,11 @@ pub(crate) struct Motion {
     pub(crate) after: Snapshot,
     /// For a leg move: the leg and its joint-space path (its joints before, then the
     /// way-points), each point with the move time it is reached at, seconds.
-    pub(crate) leg_path: Option<(usize, Vec<(f64, Vec<f64>)>)>,
+    pub(crate) leg_path: Option<(usize, TimedPath)>,
 }
+
+/// A joint-space path, each point (its joints) with the move time it is reached at, seconds.
+pub(crate) type TimedPath = Vec<(f64, Vec<f64>)>;
 
 impl Motion {
     /// The state `elapsed` into the move.

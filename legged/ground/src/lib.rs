@@ -10,7 +10,7 @@
 //!   robot's state as it came across.
 //! - [`demo`](mod@demo): the whole session on one machine: two centrals, the Controller, the
 //!   monitor, the bridge and the operator; the bridge's log played back and compared.
-//! - [`error`]: [`GroundError`].
+//! - [`error`]: the errors, [`GroundError`].
 
 pub mod demo;
 pub mod error;

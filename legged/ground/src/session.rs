@@ -108,7 +108,7 @@ pub fn plan_steps(
     for step in 0..options.steps {
         let i = step % legs.len();
         let leg = &legs[i];
-        let forward = (step / legs.len()) % 2 == 0;
+        let forward = (step / legs.len()).is_multiple_of(2);
         let dx = if forward {
             options.stride_m
         } else {

@@ -44,7 +44,7 @@
 //! - [`stats`]: measured delays against the setting ([`DelayStats`]);
 //!   [`end_to_end`](mod@end_to_end): the same from the two centrals' logs.
 //! - [`playback`]: a recorded session played back to a ground side ([`play`]).
-//! - [`error`]: [`BridgeError`].
+//! - [`error`]: the errors, [`BridgeError`].
 
 pub mod bridge;
 pub mod crossing;

@@ -51,12 +51,15 @@ impl Forwarded {
     }
 }
 
+/// Exact names not registered yet on the side that handles them, with the way they cross.
+pub(crate) type Missing = Vec<(Direction, MessageName)>;
+
 /// What each way's names and patterns select in `registries` (robot's, ground's): the
 /// forwarded messages, and the exact names not there yet, with their way.
 pub(crate) fn select(
     config: &BridgeConfig,
     registries: [&Registry; 2],
-) -> Result<(Vec<Forwarded>, Vec<(Direction, MessageName)>)> {
+) -> Result<(Vec<Forwarded>, Missing)> {
     let mut found: BTreeMap<MessageName, Forwarded> = BTreeMap::new();
     let mut missing = Vec::new();
     for d in Direction::BOTH {

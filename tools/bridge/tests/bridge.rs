@@ -511,7 +511,7 @@ async fn the_log_measures_every_crossing_and_plays_back_the_same() {
     // Sent twice: the recording answers one, and has no more for the other.
     let first = operator2.send_watched(&Move { x: 1 }, []).unwrap();
     let second = operator2.send_watched(&Move { x: 1 }, []).unwrap();
-    let mut outcomes = vec![
+    let mut outcomes = [
         within("a move answered from the recording", first.outcome())
             .await
             .unwrap(),
