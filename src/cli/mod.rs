@@ -1,5 +1,6 @@
 //! Command-line parsing and the subcommands.
 
+mod bridge;
 mod bus;
 mod central;
 mod chaos;
@@ -84,6 +85,10 @@ enum Command {
     /// Navigate toward a goal given relative to the start over terrain discovered on the way
     /// (depth camera, drifting odometry, danger map, D* Lite).
     Navigate(navigate::NavigateArgs),
+    /// A telemetry bridge between a robot's central and its operators': messages forwarded
+    /// each way with a delay, all logged; a recorded session played back.
+    #[command(subcommand)]
+    Bridge(bridge::BridgeCommand),
 }
 
 /// Where to find central (shared by the commands that connect).
@@ -205,6 +210,7 @@ pub(crate) fn main() -> ExitCode {
             Command::Foxglove(args) => foxglove::run(args).await,
             Command::Plan(cmd) => plan::run(cmd).await,
             Command::Navigate(args) => navigate::run_navigate(args).await,
+            Command::Bridge(cmd) => bridge::run(cmd).await,
         }
     });
     let result = match runtime.block_on(command) {

@@ -22,6 +22,7 @@ pub(crate) const BUILTIN_MODULES: &[&str] = &[
     "legged-ism",
     "legged-ltm",
     "legged-gait",
+    "legged-telemetry",
     "cgspace-worker",
     "nav-controller",
     "nav-ism",
@@ -33,7 +34,8 @@ pub(crate) const BUILTIN_MODULES: &[&str] = &[
 pub(crate) struct ModuleArgs {
     /// The built-in module to run: echo; the single leg's controller, ism, ltm, pdm, lrp or
     /// gait; a multi-legged robot's legged-controller, legged-ism, legged-ltm or
-    /// legged-gait (with --robot); cgspace-worker (with --index, --robot and --terrain or
+    /// legged-gait (with --robot); legged-telemetry, the ground side's telemetry monitor
+    /// (with --record FILE.jsonl to keep it); cgspace-worker (with --index, --robot and --terrain or
     /// --course), one worker of the distributed CG-space route planner; the navigation
     /// modules nav-controller, nav-ism, nav-ltm or nav-navigator (with --course ramps|hill
     /// or --terrain FILE.asc, and --start, --drift, --seed, --matcher as `tca navigate`).
@@ -86,6 +88,13 @@ pub(crate) struct ModuleArgs {
     /// Navigation modules: the LTM Matcher is on (give nav-ltm and nav-navigator the same).
     #[arg(long)]
     matcher: bool,
+    /// legged-controller publishes legged.telemetry (joint angles, body pose, foot forces)
+    /// this many times a second, on a central on wall-clock time.
+    #[arg(long, value_name = "HZ")]
+    telemetry: Option<f64>,
+    /// legged-telemetry writes everything it receives to this file, a JSON object a line.
+    #[arg(long, value_name = "FILE.jsonl")]
+    record: Option<std::path::PathBuf>,
     /// Seed of the random course and of the scanner noise.
     #[arg(long, default_value_t = 1)]
     seed: u64,
@@ -101,6 +110,8 @@ pub(crate) struct ModuleArgs {
     compute: super::Compute,
     /// The Controller simulator's speed: simulated time runs FACTOR times faster than the
     /// wall clock (1 = real time, as the 1990 testbed). Default: as fast as it computes.
+    /// legged-controller then carries out moves on the wall clock, FACTOR times faster than
+    /// the robot (on a central on wall-clock time).
     #[arg(long, value_name = "FACTOR")]
     speed: Option<f64>,
     /// Keep what must survive a restart of this module in DIR: the Controller's leg and
@@ -139,6 +150,27 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
             args.name
         );
     }
+    if args.name == "legged-telemetry" {
+        let (module, _feed) = tca_legged_ground::connect_monitor(
+            &connector,
+            tca_legged_ground::MonitorOptions {
+                record: args.record.clone(),
+                ..Default::default()
+            },
+        )
+        .await
+        .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
+        return serve(module, &args.name, &endpoint).await;
+    }
+    if args.record.is_some() {
+        anyhow::bail!("--record is for legged-telemetry, not {}", args.name);
+    }
+    if args.telemetry.is_some() && args.name != "legged-controller" {
+        anyhow::bail!("--telemetry is for legged-controller, not {}", args.name);
+    }
+    if args.name == "legged-controller" && (args.telemetry.is_some() || args.speed.is_some()) {
+        return run_live_controller(&args, &connector, &endpoint).await;
+    }
     if let Some(inner) = args.name.strip_prefix("legged-") {
         let Some(robot) = &args.robot else {
             anyhow::bail!(
@@ -146,17 +178,7 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
                 args.name
             );
         };
-        let options = super::legged_walk::module_options(&super::legged_walk::ModuleWalk {
-            robot,
-            course: args.course.as_deref(),
-            terrain: args.terrain.as_deref(),
-            start: args.start.as_deref(),
-            seed: args.seed,
-            ground_truth: args.ground_truth,
-            faults: &args.fault,
-            planner: &args.planner,
-            gait: args.gait.as_deref(),
-        })?;
+        let options = legged_options(&args, robot)?;
         let module = tca_legged_walk::walk::connect_module_for(inner, &connector, &options)
             .await
             .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
@@ -197,6 +219,47 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
     }
     .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
     serve(module, &args.name, &endpoint).await
+}
+
+/// The legged walk a legged module is set up for, from its arguments.
+fn legged_options(
+    args: &ModuleArgs,
+    robot: &str,
+) -> anyhow::Result<tca_legged_walk::LeggedWalkOptions> {
+    super::legged_walk::module_options(&super::legged_walk::ModuleWalk {
+        robot,
+        course: args.course.as_deref(),
+        terrain: args.terrain.as_deref(),
+        start: args.start.as_deref(),
+        seed: args.seed,
+        ground_truth: args.ground_truth,
+        faults: &args.fault,
+        planner: &args.planner,
+        gait: args.gait.as_deref(),
+    })
+}
+
+/// `tca module legged-controller --telemetry HZ --speed FACTOR`: the simulated Controller on
+/// the wall clock, publishing telemetry.
+async fn run_live_controller(
+    args: &ModuleArgs,
+    connector: &Connector,
+    endpoint: &str,
+) -> anyhow::Result<ExitCode> {
+    let Some(robot) = &args.robot else {
+        anyhow::bail!(
+            "module legged-controller is a multi-legged robot's: give its robot with --robot NAME|FILE.urdf"
+        );
+    };
+    let options = legged_options(args, robot)?;
+    let prepared = tca_legged_walk::walk::prepare(&options)?;
+    let mut config = prepared.setup.controller_config();
+    config.telemetry_hz = args.telemetry;
+    config.speed = args.speed;
+    let module = tca_legged_controller::connect(connector, config)
+        .await
+        .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
+    serve(module, &args.name, endpoint).await
 }
 
 /// `tca module cgspace-worker --index K --robot R --terrain F`: builds its CG-space (the

@@ -27,7 +27,21 @@ pub struct LeggedControllerConfig {
     pub module_name: String,
     /// Hardware faults to inject (none by default).
     pub faults: Vec<InjectedFault>,
+    /// Publish `legged.telemetry` this many times a second (wall clock), from the
+    /// Controller's start; `None` (the default): no telemetry. Needs a central on wall-clock
+    /// time.
+    pub telemetry_hz: Option<f64>,
+    /// Carry out moves in wall-clock time, this many times faster than the robot would (1:
+    /// as fast as the robot): a move's handler takes its duration divided by this, its
+    /// informs go out when their events happen, telemetry shows the move part-way, and the
+    /// module stamps its messages with the wall clock, like a real robot's Controller.
+    /// `None` (the default): moves end at once in wall-clock time and take their duration
+    /// in simulated time. Needs a central on wall-clock time.
+    pub speed: Option<f64>,
 }
+
+/// Most telemetry samples a second.
+pub const MAX_TELEMETRY_HZ: f64 = 1000.0;
 
 impl LeggedControllerConfig {
     /// A configuration with the simulator's defaults for the robot
@@ -47,7 +61,31 @@ impl LeggedControllerConfig {
             params,
             module_name: DEFAULT_MODULE_NAME.to_owned(),
             faults: Vec::new(),
+            telemetry_hz: None,
+            speed: None,
         }
+    }
+
+    /// Refuses a telemetry rate or a speed that is not a positive number (a rate above
+    /// [`MAX_TELEMETRY_HZ`] too), saying what to give.
+    pub fn check_wall_clock(&self) -> Result<(), String> {
+        if let Some(hz) = self.telemetry_hz
+            && !(hz.is_finite() && hz > 0.0 && hz <= MAX_TELEMETRY_HZ)
+        {
+            return Err(format!(
+                "a telemetry rate of {hz} Hz is not valid: give a rate above 0 and at most \
+                 {MAX_TELEMETRY_HZ} samples a second"
+            ));
+        }
+        if let Some(speed) = self.speed
+            && !(speed.is_finite() && speed > 0.0)
+        {
+            return Err(format!(
+                "a speed of {speed} is not valid: give a positive factor (1: moves take as long \
+                 as on the robot)"
+            ));
+        }
+        Ok(())
     }
 }
 

@@ -33,6 +33,9 @@
 //! - Informs it sends: `legged.supportState` at the first command (the state before it), at
 //!   every lift-off and after every move carried out; `legged.footContact` at every lift-off
 //!   and touch-down. Their `t_s` is the simulator's clock.
+//! - Telemetry ([`LeggedControllerConfig::telemetry_hz`]): `legged.telemetry` (joint angles,
+//!   body pose, foot forces, centre of mass, margin) at a set rate on the wall clock, once a
+//!   module handles it; moves under way in wall-clock time are sampled part-way.
 //!
 //! # Time
 //!
@@ -41,13 +44,20 @@
 //! simulated clock the command ends that much later in simulated time, and a whole walk
 //! runs as fast as the machine allows with durations that add up like the robot's.
 //!
+//! With a speed ([`LeggedControllerConfig::speed`]) it runs on the wall clock instead, like a
+//! real robot's Controller: a move takes its duration divided by the speed, its informs go
+//! out as their events happen, and its messages carry wall-clock stamps. Telemetry and a
+//! speed need a central on wall-clock time.
+//!
 //! # Layout
 //!
 //! - [`config`] has [`LeggedControllerConfig`].
-//! - `serve.rs`: [`connect`], the handlers.
+//! - `serve.rs`: [`connect`], the handlers, the telemetry loop.
+//! - `telemetry.rs`: telemetry samples, at rest and interpolated along a move under way.
 
 pub mod config;
 mod serve;
+mod telemetry;
 
-pub use config::{DEFAULT_MODULE_NAME, InjectedFault, LeggedControllerConfig};
+pub use config::{DEFAULT_MODULE_NAME, InjectedFault, LeggedControllerConfig, MAX_TELEMETRY_HZ};
 pub use serve::connect;

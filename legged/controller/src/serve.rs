@@ -5,15 +5,19 @@ use std::time::Duration;
 
 use tca_legged_messages::{
     BodyMove, BodyPose, FootContact, Halt, HardwareFault, LegMove, LegState, LeggedStatus,
-    LeggedStatusReply, Resume, RobotDescription, RobotModel, SupportState,
+    LeggedStatusReply, Resume, RobotDescription, RobotModel, SupportState, Telemetry,
 };
+use tca_legged_model::RobotModel as Model;
 use tca_legged_sim::{
     LeggedSim, MoveError, MoveException, MoveReport, isometry_to_pose, pose_to_isometry,
     world_point,
 };
+use tca_messages::Message;
 use tca_module::{Connector, Context, HandlerError, Module, ModuleError};
+use tokio::time::Instant;
 
 use crate::config::{InjectedFault, LeggedControllerConfig};
+use crate::telemetry::{Motion, Snapshot, timed_path};
 
 /// Connects the simulated Controller to central under `config.module_name` and serves the
 /// `legged.` Controller messages until the returned [`Module`] (and every clone) is dropped
@@ -30,6 +34,9 @@ pub async fn connect(
         config.params.clone(),
     )
     .map_err(|e| ModuleError::Config(format!("legged controller: {e}")))?;
+    config
+        .check_wall_clock()
+        .map_err(|e| ModuleError::Config(format!("legged controller: {e}")))?;
     for fault in &config.faults {
         fault
             .check(&config.model)
@@ -52,19 +59,23 @@ pub async fn connect(
             commanded: false,
             faults: config.faults.clone(),
             halted_at_s: None,
+            motion: None,
         })),
         turn: Arc::new(tokio::sync::Mutex::new(())),
+        model: config.model.clone(),
+        speed: config.speed,
     };
-    Module::builder(config.module_name.clone())
+    let module = Module::builder(config.module_name.clone())
         .replace(true)
-        .simulated_time(true)
+        .simulated_time(config.speed.is_none())
         .handle({
             let s = s.clone();
             move |ctx: Context, m: LegMove| {
                 let s = s.clone();
                 async move {
                     let legs = vec![m.leg.clone()];
-                    s.command(&ctx, Moves::Legs(legs), |sim| {
+                    let path = Some((m.leg.as_str(), m.waypoints.as_slice()));
+                    s.command(&ctx, Moves::Legs(legs), path, |sim| {
                         sim.leg_move(&m.leg, &m.waypoints, m.transition)
                     })
                     .await
@@ -77,7 +88,7 @@ pub async fn connect(
                 let s = s.clone();
                 async move {
                     let target = pose_to_isometry(&m.target);
-                    s.command(&ctx, Moves::Standing, |sim| sim.body_move(&target))
+                    s.command(&ctx, Moves::Standing, None, |sim| sim.body_move(&target))
                         .await
                 }
             }
@@ -128,23 +139,91 @@ pub async fn connect(
                 async move { reply }
             }
         })
-        .handle(move |_ctx, _q: LeggedStatus| {
-            let reply = {
-                let state = s.lock();
-                let c = state.sim.counters();
-                LeggedStatusReply {
-                    clock_s: state.sim.clock_s(),
-                    falls: c.falls,
-                    collisions: c.collisions,
-                    self_collisions: c.self_collisions,
-                    fallen: state.sim.fallen(),
-                    moves: c.moves,
-                }
-            };
-            async move { Ok(reply) }
+        .handle({
+            let s = s.clone();
+            move |_ctx, _q: LeggedStatus| {
+                let reply = {
+                    let state = s.lock();
+                    let c = state.sim.counters();
+                    LeggedStatusReply {
+                        clock_s: state.sim.clock_s(),
+                        falls: c.falls,
+                        collisions: c.collisions,
+                        self_collisions: c.self_collisions,
+                        fallen: state.sim.fallen(),
+                        moves: c.moves,
+                    }
+                };
+                async move { Ok(reply) }
+            }
         })
         .connect(connector)
-        .await
+        .await?;
+    if (config.telemetry_hz.is_some() || config.speed.is_some())
+        && module.central_keeps_simulated_time()
+    {
+        module.close().await;
+        return Err(ModuleError::Config(
+            "legged controller: telemetry at a rate and moves in wall-clock time (--telemetry, \
+             --speed) need a central on wall-clock time; this central keeps a simulated clock: \
+             start it without --simulated-time, or leave both out"
+                .into(),
+        ));
+    }
+    if let Some(hz) = config.telemetry_hz {
+        tokio::spawn(publish_telemetry(module.downgrade(), s, hz));
+    }
+    Ok(module)
+}
+
+/// How often the telemetry loop looks again whether anyone handles `legged.telemetry`.
+const LOOK_AGAIN: Duration = Duration::from_secs(1);
+
+/// Publishes `legged.telemetry` `hz` times a second until the module closes; while no module
+/// handles it, says so once and waits.
+async fn publish_telemetry(module: tca_module::WeakModule, s: Shared, hz: f64) {
+    let mut tick = tokio::time::interval(Duration::from_secs_f64(1.0 / hz));
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+    let mut seq = 0u64;
+    let mut handled = false;
+    let mut looked: Option<Instant> = None;
+    let mut said = false;
+    loop {
+        tick.tick().await;
+        let Some(m) = module.upgrade() else { return };
+        if m.is_closed() {
+            return;
+        }
+        if !m.is_online() {
+            handled = false;
+            continue;
+        }
+        if !handled {
+            if looked.is_some_and(|t| t.elapsed() < LOOK_AGAIN) {
+                continue;
+            }
+            looked = Some(Instant::now());
+            handled = match m.registry().await {
+                Ok(r) => r.entries.iter().any(|e| e.name.as_str() == Telemetry::NAME),
+                Err(_) => false,
+            };
+            if !handled {
+                if !said {
+                    tracing::info!(
+                        "no module handles {} yet; the Controller publishes telemetry once one does",
+                        Telemetry::NAME
+                    );
+                    said = true;
+                }
+                continue;
+            }
+        }
+        let sample = s.sample(seq);
+        match m.inform(&sample) {
+            Ok(()) => seq += 1,
+            Err(e) => tracing::warn!(error = %e, "telemetry not sent"),
+        }
+    }
 }
 
 struct State {
@@ -155,6 +234,8 @@ struct State {
     faults: Vec<InjectedFault>,
     /// When the emergency stop came (motion clock, seconds), until a resume.
     halted_at_s: Option<f64>,
+    /// The move under way in wall-clock time, if any.
+    motion: Option<Motion>,
 }
 
 impl State {
@@ -207,6 +288,10 @@ struct Shared {
     state: Arc<Mutex<State>>,
     /// Held by a command for its whole run.
     turn: Arc<tokio::sync::Mutex<()>>,
+    /// The robot.
+    model: Arc<Model>,
+    /// Moves take their duration divided by this on the wall clock (`None`: simulated time).
+    speed: Option<f64>,
 }
 
 /// What a command sends, in order.
@@ -220,12 +305,26 @@ impl Shared {
         self.state.lock().unwrap_or_else(|p| p.into_inner())
     }
 
-    /// Runs a move on the simulator, sends its informs, spends its simulated time, then
-    /// raises a failure's exception and ends.
+    /// A telemetry sample of the robot now (part-way through a move under way).
+    fn sample(&self, seq: u64) -> Telemetry {
+        let snapshot = {
+            let state = self.lock();
+            match &state.motion {
+                Some(m) if m.started.elapsed() < m.wall => m.at(m.started.elapsed()),
+                _ => Snapshot::of(&state.sim),
+            }
+        };
+        snapshot.sample(&self.model, seq)
+    }
+
+    /// Runs a move on the simulator, sends its informs, spends its time (simulated, or on the
+    /// wall clock with a speed, the informs then going out as their events happen), then
+    /// raises a failure's exception and ends. `path` is a leg move's leg and way-points.
     async fn command(
         &self,
         ctx: &Context,
         moves: Moves,
+        path: Option<(&str, &[Vec<f64>])>,
         run: impl FnOnce(&mut LeggedSim) -> Result<MoveReport, MoveError>,
     ) -> Result<(), HandlerError> {
         let _turn = self.turn.lock().await;
@@ -237,13 +336,14 @@ impl Shared {
             }
             return Err(HandlerError::new(fault.detail));
         }
-        let (outgoing, duration_s, result) = {
+        let (outgoing, duration_s, result, motion) = {
             let mut state = self.lock();
             let mut outgoing = Vec::new();
             if !state.commanded {
                 state.commanded = true;
-                outgoing.push(Outgoing::State(state.sim.support_state()));
+                outgoing.push((0.0, Outgoing::State(state.sim.support_state())));
             }
+            let before = self.speed.map(|_| Snapshot::of(&state.sim));
             let result = run(&mut state.sim);
             let report = match &result {
                 Ok(r) => Some(r.clone()),
@@ -254,20 +354,45 @@ impl Shared {
             if let Some(r) = report {
                 duration_s = r.duration_s;
                 for e in r.events {
-                    outgoing.push(Outgoing::Contact(FootContact {
-                        leg: e.leg_name.clone(),
-                        at: world_point(&e.at),
-                        stance: e.stance,
-                    }));
+                    let at = (e.t_s - r.start_s).max(0.0);
+                    outgoing.push((
+                        at,
+                        Outgoing::Contact(FootContact {
+                            leg: e.leg_name.clone(),
+                            at: world_point(&e.at),
+                            stance: e.stance,
+                        }),
+                    ));
                     if !e.stance {
-                        outgoing.push(Outgoing::State(e.state));
+                        outgoing.push((at, Outgoing::State(e.state)));
                     }
                 }
-                outgoing.push(Outgoing::State(state.sim.support_state()));
+                outgoing.push((duration_s, Outgoing::State(state.sim.support_state())));
             }
-            (outgoing, duration_s, result)
+            let motion = match (self.speed, before) {
+                (Some(speed), Some(before)) if duration_s > 0.0 && duration_s.is_finite() => {
+                    let leg_path = path.and_then(|(leg, waypoints)| {
+                        let i = self.model.leg_index(leg)?;
+                        let start = before.posture.get(i)?;
+                        Some((i, timed_path(&self.model, i, start, waypoints)?))
+                    });
+                    Some(Motion {
+                        started: Instant::now(),
+                        wall: Duration::from_secs_f64(duration_s / speed),
+                        after: Snapshot::of(&state.sim),
+                        before,
+                        leg_path,
+                    })
+                }
+                _ => None,
+            };
+            state.motion = motion.clone();
+            (outgoing, duration_s, result, motion)
         };
-        for o in &outgoing {
+        for (at_s, o) in &outgoing {
+            if let (Some(m), Some(speed)) = (&motion, self.speed) {
+                tokio::time::sleep_until(m.started + Duration::from_secs_f64(at_s / speed)).await;
+            }
             let sent = match o {
                 Outgoing::State(s) => ctx.inform(s),
                 Outgoing::Contact(c) => ctx.inform(c),
@@ -276,8 +401,15 @@ impl Shared {
                 tracing::warn!(error = %e, "could not send a controller inform");
             }
         }
-        if duration_s > 0.0 && duration_s.is_finite() {
-            ctx.spend(Duration::from_secs_f64(duration_s));
+        match &motion {
+            Some(m) => {
+                tokio::time::sleep_until(m.started + m.wall).await;
+                self.lock().motion = None;
+            }
+            None if self.speed.is_none() && duration_s > 0.0 && duration_s.is_finite() => {
+                ctx.spend(Duration::from_secs_f64(duration_s));
+            }
+            None => {}
         }
         match result {
             Ok(_) => Ok(()),

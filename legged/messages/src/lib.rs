@@ -17,10 +17,13 @@
 //! - [`exceptions`]: [`MoveFailed`], [`HardwareFault`], [`TipOver`].
 //! - [`walking`]: the [`LeggedWalk`] goal, the [`SupportState`] inform every support change
 //!   sends, and the Controller's counters ([`LeggedStatus`]).
+//! - [`telemetry`]: the [`Telemetry`] inform a Controller publishes at a set rate (joint
+//!   angles, body pose, foot forces) and the operator side's [`LatestTelemetry`] query.
 
 pub mod controller;
 pub mod exceptions;
 pub mod geometry;
+pub mod telemetry;
 pub mod walking;
 
 pub use controller::{
@@ -29,6 +32,7 @@ pub use controller::{
 };
 pub use exceptions::{HardwareFault, MoveFailed, MoveFailureKind, TipOver};
 pub use geometry::{Pose, WorldPoint};
+pub use telemetry::{LatestTelemetry, LatestTelemetryReply, Telemetry};
 pub use walking::{FootState, LeggedStatus, LeggedStatusReply, LeggedWalk, SupportState};
 
 #[cfg(test)]

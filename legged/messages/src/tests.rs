@@ -26,6 +26,8 @@ fn every_message_has_a_format_its_class_and_the_namespace() {
     check::<LeggedWalk>(Class::Goal);
     check::<SupportState>(Class::Inform);
     check::<LeggedStatus>(Class::Query);
+    check::<Telemetry>(Class::Inform);
+    check::<LatestTelemetry>(Class::Query);
 }
 
 #[test]

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use tca_ism::{IsmConfig, PoseSource, SensorSpec, VirtualScanner};
 use tca_legged_controller::{InjectedFault, LeggedControllerConfig};
 use tca_legged_model::RobotModel;
-use tca_legged_sim::{SimParams, StartPose};
+use tca_legged_sim::StartPose;
 use tca_ltm::LtmConfig;
 use tca_module::{ComputeTime, Connector, Module, ModuleError};
 use tca_robot::HeightField;
@@ -84,6 +84,21 @@ impl LeggedPlanner {
 }
 
 impl LeggedSetup {
+    /// The simulated Controller's configuration for this setup (module `controller`, the
+    /// simulator's defaults for the robot, the faults to inject).
+    pub fn controller_config(&self) -> LeggedControllerConfig {
+        LeggedControllerConfig {
+            module_name: "controller".into(),
+            faults: self.faults.clone(),
+            ..LeggedControllerConfig::new(
+                self.model.clone(),
+                self.urdf.clone(),
+                self.terrain.clone(),
+                self.start,
+            )
+        }
+    }
+
     /// Half the side of the map the walking module asks for: the region the feet can reach
     /// from where the step leaves the body, with room for a body move.
     pub fn map_half_side_m(&self) -> f64 {
@@ -103,18 +118,7 @@ pub async fn connect_module(
     setup: &LeggedSetup,
 ) -> Result<Module, ModuleError> {
     match name {
-        "controller" => {
-            let config = LeggedControllerConfig {
-                model: setup.model.clone(),
-                urdf: setup.urdf.clone(),
-                terrain: setup.terrain.clone(),
-                start: setup.start,
-                params: SimParams::for_model(&setup.model),
-                module_name: "controller".into(),
-                faults: setup.faults.clone(),
-            };
-            tca_legged_controller::connect(connector, config).await
-        }
+        "controller" => tca_legged_controller::connect(connector, setup.controller_config()).await,
         "ism" => {
             // The Perceptron on a mast sized for this robot's feet (see `mount`).
             let spec = SensorSpec::perceptron();

@@ -89,6 +89,8 @@ pub use connector::Connector;
 pub use context::Context;
 pub use credentials::{TlsFiles, ZenohLogin};
 pub use error::{HandlerError, ModuleError, Result};
-pub use module::{DEFAULT_QUERY_TIMEOUT, Module, Task, WatchedTask, raise_action, send_action};
+pub use module::{
+    DEFAULT_QUERY_TIMEOUT, Module, Task, WatchedTask, WeakModule, raise_action, send_action,
+};
 pub use tca_messages::control::MonitorAction;
 pub use tca_messages::{self as messages, ConstraintSpec, TaskRef, kind};

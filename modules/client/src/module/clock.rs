@@ -86,6 +86,13 @@ impl Module {
         self.shared.sim_time && self.shared.central_clock.load(Ordering::Relaxed)
     }
 
+    /// Whether central keeps the system's simulated clock (its welcome said so), whatever
+    /// this module stamps its messages with. Tools that work in wall-clock time (a bridge
+    /// that delays traffic by real seconds) refuse such a central.
+    pub fn central_keeps_simulated_time(&self) -> bool {
+        self.shared.central_clock.load(Ordering::Relaxed)
+    }
+
     /// Central's welcome said whether it keeps the simulated clock.
     pub(crate) fn set_central_clock(&self, on: bool) {
         self.shared.central_clock.store(on, Ordering::Relaxed);

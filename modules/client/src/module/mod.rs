@@ -102,6 +102,26 @@ pub struct Module {
     pub(crate) handling: Option<MessageId>,
 }
 
+/// A handle that does not keep the module connected ([`Module::downgrade`]): for a task
+/// beside the module's handlers (a periodic publisher) that must end with the module instead
+/// of keeping its link open.
+#[derive(Clone, Debug)]
+pub struct WeakModule {
+    shared: std::sync::Weak<Shared>,
+}
+
+impl WeakModule {
+    /// The module, while any [`Module`] handle to it lives.
+    pub fn upgrade(&self) -> Option<Module> {
+        self.shared.upgrade().map(|shared| Module {
+            shared,
+            context: None,
+            clock: None,
+            handling: None,
+        })
+    }
+}
+
 impl std::fmt::Debug for Module {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Module")
@@ -199,6 +219,14 @@ impl Module {
             context: None,
             clock: None,
             handling: None,
+        }
+    }
+
+    /// A handle that does not keep the module connected: the link closes when the last
+    /// [`Module`] handle is dropped, whatever weak handles remain.
+    pub fn downgrade(&self) -> WeakModule {
+        WeakModule {
+            shared: Arc::downgrade(&self.shared),
         }
     }
 
