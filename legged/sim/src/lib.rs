@@ -34,10 +34,12 @@
 //! - [`report`] has [`MoveReport`], [`FootEvent`], [`Counters`].
 //! - [`error`] has [`SimError`], [`MoveError`] and the bus exception it raises.
 //! - [`pose`] has conversions to and from the bus's poses and points.
-//! - `collide.rs`: shapes and foot spheres against the height field.
+//! - [`collide`]: shapes and foot spheres against the height field; [`collide::rest_height`],
+//!   [`collide::touch_point`] and [`collide::foot_clearance`] of a foot sphere are public
+//!   for planners that place feet as the simulator does.
 
 mod body_move;
-mod collide;
+pub mod collide;
 pub mod error;
 mod leg_move;
 pub mod params;

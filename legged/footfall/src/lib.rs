@@ -1,0 +1,13 @@
+//! FootFall: single-step planning for one limb of an ATHLETE-like rover, after SunSpiral
+//! et al.'s ground tools for ATHLETE. A pure algorithm crate: no bus, no clock.
+
+pub mod collision;
+pub mod error;
+pub mod ground;
+pub mod margins;
+pub mod reach;
+pub mod scene;
+pub mod terrain;
+
+pub use error::{FootfallError, Result};
+pub use scene::Scene;
