@@ -4,6 +4,7 @@
 pub mod collision;
 pub mod error;
 pub mod ground;
+pub mod maps;
 pub mod margins;
 pub mod reach;
 pub mod scene;

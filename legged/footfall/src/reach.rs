@@ -15,7 +15,7 @@ use rand_chacha::ChaCha8Rng;
 use tca_legged_model::{JointKind, Leg};
 
 /// How close a placement must come.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ReachTolerance {
     /// Distance from the foot's centre to its target, metres.
     pub position_m: f64,
@@ -173,6 +173,8 @@ fn descend(
         dp.norm_squared() + (AXIS_WEIGHT_M * AXIS_WEIGHT_M) * da.norm_squared()
     };
     let mut current = cost(&dp, &da);
+    // Steps that gain almost nothing mean a local minimum away from the goal.
+    let mut stalled = 0;
     for _ in 0..tolerance.max_iterations {
         if dist <= tolerance.position_m && angle <= tolerance.axis_rad {
             return Some(q);
@@ -215,6 +217,14 @@ fn descend(
         let (cdp, cda, cdist, cangle) = residual(leg, goal, &candidate);
         let c = cost(&cdp, &cda);
         if c < current {
+            stalled = if current - c < 1e-4 * current {
+                stalled + 1
+            } else {
+                0
+            };
+            if stalled >= 4 {
+                break;
+            }
             q = candidate;
             (dp, da, dist, angle, current) = (cdp, cda, cdist, cangle, c);
             damping = (damping * 0.3).max(1e-7 * scale);
