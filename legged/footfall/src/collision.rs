@@ -129,7 +129,8 @@ pub struct LegChecker {
     still_margins: Vec<Vec<f64>>,
     /// Pairs of moving parts checked against each other, with their margin.
     own_pairs: Vec<(usize, usize, f64)>,
-    terrain: Arc<TerrainPatch>,
+    /// The terrain, or `None` for a checker of the robot's own parts only.
+    terrain: Option<Arc<TerrainPatch>>,
     environment_m: f64,
     /// How far the wheel may dip into the ground on lift and drop, metres.
     touch_tolerance_m: f64,
@@ -160,6 +161,9 @@ pub struct CheckerParams {
     pub resolution_rad: f64,
     /// The terrain is raised this much for planning, metres (0: as it is).
     pub raise_m: f64,
+    /// Whether the terrain is checked at all (false: only the robot's parts against each
+    /// other, for a foot standing on the ground).
+    pub terrain: bool,
 }
 
 impl Default for CheckerParams {
@@ -168,6 +172,7 @@ impl Default for CheckerParams {
             margins: MarginTable::default(),
             resolution_rad: 0.01,
             raise_m: 0.0,
+            terrain: true,
         }
     }
 }
@@ -307,12 +312,16 @@ impl LegChecker {
         }
         let base = body_world * l.base_position();
         let half = l.reach_bound() + l.foot_radius() + margins.environment_m + 0.2;
-        let terrain = TerrainPatch::around(
-            &scene.terrain,
-            Point2::new(base.x, base.y),
-            half,
-            params.raise_m,
-        )?;
+        let terrain = if params.terrain {
+            Some(Arc::new(TerrainPatch::around(
+                &scene.terrain,
+                Point2::new(base.x, base.y),
+                half,
+                params.raise_m,
+            )?))
+        } else {
+            None
+        };
         Ok(LegChecker {
             scene,
             leg,
@@ -321,7 +330,7 @@ impl LegChecker {
             still,
             still_margins,
             own_pairs,
-            terrain: Arc::new(terrain),
+            terrain,
             environment_m: margins.environment_m,
             touch_tolerance_m: 0.01,
             resolution_rad: params.resolution_rad,
@@ -339,9 +348,9 @@ impl LegChecker {
         self.leg
     }
 
-    /// The terrain patch (raised as planned).
-    pub fn terrain(&self) -> &TerrainPatch {
-        &self.terrain
+    /// The terrain patch (raised as planned), if the terrain is checked.
+    pub fn terrain(&self) -> Option<&TerrainPatch> {
+        self.terrain.as_deref()
     }
 
     /// The joint-space resolution of segment checks, radians.
@@ -405,7 +414,7 @@ impl LegChecker {
                     continue;
                 }
                 if let Some(d) = distance(&parry_pose, &part.solid, &other.pose, &other.solid)
-                    && d < margin
+                    && too_close(d, margin)
                 {
                     return Some(Hit {
                         part: part.link.clone(),
@@ -428,7 +437,7 @@ impl LegChecker {
                 to_pose(&(pb * b.solid.correction)),
             );
             if let Some(d) = distance(&ppa, &a.solid, &ppb, &b.solid)
-                && d < margin
+                && too_close(d, margin)
             {
                 return Some(Hit {
                     part: a.link.clone(),
@@ -447,6 +456,7 @@ impl LegChecker {
         pose: &Isometry3<f64>,
         phase: Phase,
     ) -> Option<Hit> {
+        let terrain = self.terrain.as_deref()?;
         let c = Point3::from(pose.translation.vector);
         let r = part.solid.bound_m;
         if part.wheel && phase == Phase::LiftOrDrop {
@@ -461,11 +471,11 @@ impl LegChecker {
             });
         }
         let margin = self.environment_m;
-        let top = self.terrain.max_over(Point2::new(c.x, c.y), r + margin);
+        let top = terrain.max_over(Point2::new(c.x, c.y), r + margin);
         if c.z - r - margin > top {
             return None;
         }
-        let below = c.z < self.terrain.height_at(c.x, c.y);
+        let below = c.z < terrain.height_at(c.x, c.y);
         let d = if below {
             Some(0.0)
         } else {
@@ -474,13 +484,13 @@ impl LegChecker {
                 &parry_pose,
                 part.solid.shape.as_ref(),
                 &Pose::identity(),
-                &self.terrain.mesh,
+                &terrain.mesh,
             )
             .ok()
             .map(|d| d.distance)
         };
         match d {
-            Some(d) if d < margin => Some(Hit {
+            Some(d) if too_close(d, margin) => Some(Hit {
                 part: part.link.clone(),
                 other: "terrain".into(),
                 distance_m: d,
@@ -549,6 +559,11 @@ impl LegChecker {
     pub fn world_down_in_body(&self) -> nalgebra::Unit<Vector3<f64>> {
         nalgebra::Unit::new_normalize(self.body_world.rotation.inverse() * -Vector3::z())
     }
+}
+
+/// Whether parts `d` apart break a margin: closer than it, or touching.
+fn too_close(d: f64, margin: f64) -> bool {
+    d < margin || d <= 0.0
 }
 
 fn distance(pa: &Pose, a: &Solid, pb: &Pose, b: &Solid) -> Option<f64> {

@@ -3,9 +3,12 @@
 //! - **red**: the foot cannot be placed there: the ground under the wheel is too steep or
 //!   too uneven (its fitted plane's slope and the ground's distance from it), or no joint
 //!   positions within the limits put the wheel's centre on the ground there with its
-//!   steering axis upright (the given foot orientation), or the wheel would leave the map;
+//!   steering axis upright (the given foot orientation), or the leg placed there would
+//!   come closer to another part of the robot than their margin (the wheel against its own
+//!   shin, a knee against the chassis), or the wheel would leave the map;
 //! - **blue**: reachable, but the way-point `waypoint_m` straight above the foot's place
-//!   (where a step passes to make up for the limbs' sag) cannot be reached;
+//!   (where a step passes to make up for the limbs' sag) cannot be reached, or not without
+//!   the leg breaking a margin to another part of the robot;
 //! - **orange**: reachable with its way-point, but the robot would not be stable: with the
 //!   foot placed there the centre of mass is closer than `min_margin_m` to the edge of the
 //!   chosen polygon (the support polygon of the feet, or the conservative polygon that stays
@@ -27,8 +30,10 @@ use serde::{Deserialize, Serialize};
 use tca_legged_sim::collide::{rest_height, touch_point};
 use tca_stability::{Polygon, conservative_support_polygon, stability_margin, support_polygon};
 
+use crate::collision::{CheckerParams, LegChecker, Phase};
 use crate::error::FootfallError;
 use crate::ground::{GroundRules, fit_footprint, fit_points};
+use crate::margins::MarginTable;
 use crate::reach::{FootGoal, ReachTolerance, place_foot, place_foot_thoroughly, upright_axis};
 use crate::scene::Scene;
 
@@ -95,6 +100,8 @@ pub struct MapParams {
     pub ground: GroundRules,
     /// How close a placement must come.
     pub reach: ReachTolerance,
+    /// The margins between parts of the robot (and from the terrain, for the planners).
+    pub margins: MarginTable,
 }
 
 impl Default for MapParams {
@@ -109,6 +116,7 @@ impl Default for MapParams {
             waypoint_m: 0.20,
             ground: GroundRules::default(),
             reach: ReachTolerance::default(),
+            margins: MarginTable::default(),
         }
     }
 }
@@ -184,7 +192,7 @@ impl Verdict {
 }
 
 /// Applies the colour rules to places for one leg's foot.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct Evaluator<'a> {
     scene: &'a Scene,
     leg: usize,
@@ -192,6 +200,8 @@ pub struct Evaluator<'a> {
     /// Where the other standing feet touch, world XY.
     others: Vec<Point2<f64>>,
     axis: Option<nalgebra::Unit<Vector3<f64>>>,
+    /// The robot's parts against each other (no terrain).
+    parts: LegChecker,
 }
 
 impl<'a> Evaluator<'a> {
@@ -216,12 +226,14 @@ impl<'a> Evaluator<'a> {
             .map(|(_, p)| Point2::new(p.x, p.y))
             .collect();
         let down = nalgebra::Unit::new_normalize(scene.body.rotation.inverse() * -Vector3::z());
+        let parts = robot_checker(scene, leg, params)?;
         Ok(Evaluator {
             scene,
             leg,
             params: params.clone(),
             others,
             axis: upright_axis(l, down),
+            parts,
         })
     }
 
@@ -295,9 +307,16 @@ impl<'a> Evaluator<'a> {
         let Some(q) = self.place(&centre, warm) else {
             return Verdict::red("the leg cannot reach it with the wheel upright".into());
         };
+        if let Some(hit) = self.parts.check(&q, Phase::Free) {
+            let mut v = Verdict::red(format!("the leg placed there would touch itself: {hit}"));
+            v.joints = Some(q);
+            return v;
+        }
         let touch = touch_point(terrain, xy, r);
         let above = centre + Vector3::z() * self.params.waypoint_m;
-        let waypoint = self.place(&above, Some(&q));
+        let waypoint = self
+            .place(&above, Some(&q))
+            .filter(|w| self.parts.check(w, Phase::Free).is_none());
         let margin = self.placed_margin(Point2::new(touch.x, touch.y), &q);
         let lift = self.lifted_margin(waypoint.as_deref().unwrap_or(&q));
         decide(
@@ -309,6 +328,24 @@ impl<'a> Evaluator<'a> {
             lift,
         )
     }
+}
+
+/// The checker of the robot's own parts (no terrain) for leg `leg`.
+fn robot_checker(
+    scene: &Scene,
+    leg: usize,
+    params: &MapParams,
+) -> Result<LegChecker, FootfallError> {
+    LegChecker::new(
+        std::sync::Arc::new(scene.clone()),
+        leg,
+        &CheckerParams {
+            margins: params.margins.clone(),
+            resolution_rad: 0.01,
+            raise_m: 0.0,
+            terrain: false,
+        },
+    )
 }
 
 /// The colour from what was found at a reachable place.
@@ -324,7 +361,7 @@ fn decide(
         (
             Colour::Blue,
             Some(format!(
-                "the way-point {:.0} cm above it cannot be reached",
+                "the way-point {:.0} cm above it cannot be reached (or not clear of the robot)",
                 params.waypoint_m * 100.0
             )),
         )
