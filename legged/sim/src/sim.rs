@@ -36,6 +36,8 @@ pub struct LeggedSim {
     pub(crate) last: Option<MoveReport>,
     /// The leg each collision shape rides on, in `collision_shapes` order.
     pub(crate) shape_legs: Vec<Option<usize>>,
+    /// The sag of the lifted leg, when the robot sags ([`SimParams::sag`]).
+    pub(crate) sag: Option<crate::sag::Sag>,
 }
 
 impl std::fmt::Debug for LeggedSim {
@@ -157,6 +159,7 @@ impl LeggedSim {
             fallen: false,
             last: None,
             shape_legs,
+            sag: None,
         };
         sim.anchors = sim.foot_centres();
         if let Some((link, at)) = sim.link_contact(&sim.body, &sim.posture, None) {
@@ -222,6 +225,24 @@ impl LeggedSim {
         (0..self.model.legs().len())
             .filter_map(|i| self.contact_point(i))
             .collect()
+    }
+
+    /// Where a foot's centre really is, world frame: for a lifted leg of a sagging robot,
+    /// lower than its joints say by the sag taken so far ([`SimParams::sag`]); otherwise as
+    /// [`Self::foot_centres`].
+    pub fn real_foot_centre(&self, leg: usize) -> Option<Point3<f64>> {
+        let l = self.model.legs().get(leg)?;
+        let (body, q, _) = self.sagged(leg, &self.posture[leg], false);
+        Some(body * l.foot_position(&q).ok()?)
+    }
+
+    /// How far the lifted leg's foot sits below where its joints put it, metres (0 when the
+    /// robot does not sag or no leg is lifted).
+    pub fn sag_drop_m(&self, leg: usize) -> f64 {
+        match (self.real_foot_centre(leg), self.foot_centres().get(leg)) {
+            (Some(real), Some(commanded)) => commanded.z - real.z,
+            _ => 0.0,
+        }
     }
 
     /// The centre of mass, legs included, world frame.
@@ -403,6 +424,102 @@ impl LeggedSim {
         leg: Option<usize>,
     ) -> Option<(String, Point3<f64>)> {
         self.link_contacts(body, posture, leg).into_iter().next()
+    }
+
+    /// The sag a leg lifting now starts, when the robot sags: the body's displacement as
+    /// its load moves onto the other standing feet, and the limb's droop.
+    pub(crate) fn begin_sag(&self, i: usize) -> Option<crate::sag::Sag> {
+        let params = self.params.sag?;
+        let inverse = self.body.inverse();
+        let feet: Vec<Point3<f64>> = self.anchors.iter().map(|a| inverse * a).collect();
+        let com = self.model.centre_of_mass(&self.posture).ok()?.centre;
+        let weight = self.model.total_mass() * crate::sag::GRAVITY;
+        let mut after = self.stance.clone();
+        after[i] = false;
+        let body = crate::sag::body_sag(
+            &feet,
+            &self.stance,
+            &after,
+            &com,
+            weight,
+            params.leg_stiffness_n_per_m,
+        );
+        let l = &self.model.legs()[i];
+        let q0 = &self.posture[i];
+        let nominal = self.body * l.foot_position(q0).ok()?;
+        let droop = self.droop(i, q0);
+        let q1: Vec<f64> = q0.iter().zip(&droop).map(|(a, d)| a + d).collect();
+        let sagged = self.body * body * l.foot_position(&q1).ok()?;
+        Some(crate::sag::Sag {
+            leg: i,
+            body,
+            foot_drop_m: nominal.z - sagged.z,
+            from_z: nominal.z,
+            taken: 0.0,
+        })
+    }
+
+    /// How the lifted leg's joints give under gravity at commanded joints `q`.
+    fn droop(&self, i: usize, q: &[f64]) -> Vec<f64> {
+        let Some(params) = self.params.sag else {
+            return vec![0.0; q.len()];
+        };
+        let gravity = self.body.rotation.inverse() * (-Vector3::z() * crate::sag::GRAVITY);
+        crate::sag::limb_droop(
+            &self.model,
+            &self.posture,
+            i,
+            q,
+            &gravity,
+            params.joint_compliance_rad_per_nm,
+        )
+    }
+
+    /// The body pose and the leg's joints as they really are when leg `i` is commanded to
+    /// `q`: sagged as far as the load has come off the foot (`update`: let a higher foot
+    /// take more of the sag), or as commanded when the robot does not sag.
+    /// Also returns the fraction of the sag taken, to be kept with [`Self::take_sag`].
+    pub(crate) fn sagged(
+        &self,
+        i: usize,
+        q: &[f64],
+        update: bool,
+    ) -> (Isometry3<f64>, Vec<f64>, f64) {
+        let Some(sag) = self.sag.as_ref().filter(|s| s.leg == i) else {
+            return (self.body, q.to_vec(), 0.0);
+        };
+        let l = &self.model.legs()[i];
+        let mut taken = sag.taken;
+        if update {
+            let z = (self.body * l.foot_position(q).unwrap_or_else(|_| Point3::origin())).z;
+            let want = if sag.foot_drop_m > 1e-9 {
+                ((z - sag.from_z) / sag.foot_drop_m).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
+            taken = taken.max(want);
+        }
+        let body = self.body * crate::sag::partial(&sag.body, taken);
+        let droop = self.droop(i, q);
+        let real = q.iter().zip(&droop).map(|(a, d)| a + taken * d).collect();
+        (body, real, taken)
+    }
+
+    /// Keeps the fraction of the sag the lifted leg has taken.
+    pub(crate) fn take_sag(&mut self, taken: f64) {
+        if let Some(s) = self.sag.as_mut() {
+            s.taken = taken;
+        }
+    }
+
+    /// Joints of leg `i` that put its foot's centre at world `centre` with the body where it
+    /// is, from `q`; `q` when none do.
+    pub(crate) fn reach_to(&self, i: usize, centre: &Point3<f64>, q: &[f64]) -> Vec<f64> {
+        let l = &self.model.legs()[i];
+        let target = self.body.inverse() * centre;
+        l.inverse_kinematics(&target, &IkOptions::starting_at(q))
+            .map(|s| s.joints)
+            .unwrap_or_else(|_| q.to_vec())
     }
 
     /// A foot's clearance over the ground for this body pose and leg joints.
