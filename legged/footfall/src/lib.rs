@@ -2,6 +2,7 @@
 //! et al.'s ground tools for ATHLETE. A pure algorithm crate: no bus, no clock.
 
 pub mod astar;
+pub mod campaign;
 pub mod collision;
 pub mod error;
 pub mod ground;
@@ -14,6 +15,7 @@ pub mod sbl;
 pub mod scene;
 pub mod smooth;
 pub mod terrain;
+pub mod verify;
 
 pub use error::{FootfallError, Result};
 pub use scene::Scene;

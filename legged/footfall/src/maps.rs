@@ -34,7 +34,9 @@ use crate::collision::{CheckerParams, LegChecker, Phase};
 use crate::error::FootfallError;
 use crate::ground::{GroundRules, fit_footprint, fit_points};
 use crate::margins::MarginTable;
-use crate::reach::{FootGoal, ReachTolerance, place_foot, place_foot_thoroughly, upright_axis};
+use crate::reach::{
+    FootGoal, ReachTolerance, place_foot_thoroughly, place_foot_where, upright_axis,
+};
 use crate::scene::Scene;
 
 /// A cell's colour.
@@ -255,8 +257,9 @@ impl<'a> Evaluator<'a> {
         }
     }
 
-    /// The joints placing the wheel's centre at `centre_world` with the foot upright, from
-    /// `warm` (when given), the leg's current joints and its neutral ones.
+    /// The joints placing the wheel's centre at `centre_world` with the foot upright and the
+    /// leg clear of the rest of the robot, from `warm` (when given), the leg's current
+    /// joints and its neutral ones.
     pub fn place(&self, centre_world: &Point3<f64>, warm: Option<&[f64]>) -> Option<Vec<f64>> {
         let l = &self.scene.model.legs()[self.leg];
         let current = &self.scene.posture[self.leg];
@@ -270,7 +273,18 @@ impl<'a> Evaluator<'a> {
         }
         starts.push(current);
         starts.push(&neutral);
-        place_foot(l, &self.goal(centre_world), &starts, &self.params.reach)
+        place_foot_where(
+            l,
+            &self.goal(centre_world),
+            &starts,
+            &self.params.reach,
+            |q| self.parts.check(q, Phase::Free).is_none(),
+        )
+    }
+
+    /// Whether joints `q` keep the leg clear of the rest of the robot.
+    pub fn clear_of_robot(&self, q: &[f64]) -> bool {
+        self.parts.check(q, Phase::Free).is_none()
     }
 
     /// The margin with the foot placed at `touch` and the leg at `q`.
@@ -305,18 +319,13 @@ impl<'a> Evaluator<'a> {
         }
         let centre = Point3::new(xy.x, xy.y, rest_height(terrain, xy, r));
         let Some(q) = self.place(&centre, warm) else {
-            return Verdict::red("the leg cannot reach it with the wheel upright".into());
+            return Verdict::red(
+                "the leg cannot reach it with the wheel upright and clear of the robot".into(),
+            );
         };
-        if let Some(hit) = self.parts.check(&q, Phase::Free) {
-            let mut v = Verdict::red(format!("the leg placed there would touch itself: {hit}"));
-            v.joints = Some(q);
-            return v;
-        }
         let touch = touch_point(terrain, xy, r);
         let above = centre + Vector3::z() * self.params.waypoint_m;
-        let waypoint = self
-            .place(&above, Some(&q))
-            .filter(|w| self.parts.check(w, Phase::Free).is_none());
+        let waypoint = self.place(&above, Some(&q));
         let margin = self.placed_margin(Point2::new(touch.x, touch.y), &q);
         let lift = self.lifted_margin(waypoint.as_deref().unwrap_or(&q));
         decide(
@@ -365,7 +374,7 @@ fn decide(
                 params.waypoint_m * 100.0
             )),
         )
-    } else if !(margin >= params.min_margin_m) {
+    } else if margin.is_nan() || margin < params.min_margin_m {
         (
             Colour::Orange,
             Some(format!(
@@ -378,7 +387,7 @@ fn decide(
                 params.min_margin_m
             )),
         )
-    } else if !(lift >= params.min_lift_margin_m) {
+    } else if lift.is_nan() || lift < params.min_lift_margin_m {
         (
             Colour::Orange,
             Some(format!(
@@ -590,7 +599,8 @@ pub fn leg_maps(scene: &Scene, leg: usize, params: &MapParams) -> Result<LegMaps
 
 /// The same rules as [`Evaluator::evaluate`], applied by other means: the ground's plane
 /// fitted to the surface sampled every centimetre under the wheel; inverse kinematics from
-/// the current and neutral joints and then 24 random starts; the support polygon's margin
+/// the current and neutral joints and then 24 random starts, taking the first solution clear
+/// of the robot's parts; the support polygon's margin
 /// as the least distance to the edges of the hull found by testing every pair of feet, and
 /// the conservative margin as the least of those over every foot left out.
 pub fn brute_force_verdict(
@@ -637,11 +647,17 @@ pub fn brute_force_verdict(
     let centre = Point3::new(xy.x, xy.y, rest_height(terrain, xy, r));
     let starts: [&[f64]; 2] = [&current, &neutral];
     let seed = (xy.x * 1000.0) as u64 ^ ((xy.y * 1000.0) as u64).rotate_left(32);
-    let Some(q) = place_foot_thoroughly(l, &goal(centre), &starts, 24, seed, &params.reach) else {
+    let Ok(parts) = robot_checker(scene, leg, params) else {
+        return Colour::Red;
+    };
+    let clear = |q: &[f64]| parts.check(q, Phase::Free).is_none();
+    let Some(q) = place_foot_thoroughly(l, &goal(centre), &starts, 24, seed, &params.reach, clear)
+    else {
         return Colour::Red;
     };
     let above = centre + Vector3::z() * params.waypoint_m;
-    let waypoint = place_foot_thoroughly(l, &goal(above), &[&q], 24, seed ^ 1, &params.reach);
+    let waypoint =
+        place_foot_thoroughly(l, &goal(above), &[&q], 24, seed ^ 1, &params.reach, clear);
     let touches = scene.touch_points();
     let mut feet: Vec<Point2<f64>> = touches
         .iter()

@@ -101,6 +101,8 @@ pub struct PlanOptions {
     pub sbl: SblParams,
     /// A*'s parameters.
     pub astar: AstarParams,
+    /// When A* finds no way, let SBL plan (true), or fail.
+    pub astar_fallback: bool,
     /// Smoothing's parameters.
     pub smooth: SmoothParams,
 }
@@ -116,6 +118,7 @@ impl Default for PlanOptions {
             map,
             sbl: SblParams::default(),
             astar: AstarParams::default(),
+            astar_fallback: true,
             smooth: SmoothParams::default(),
         }
     }
@@ -170,6 +173,12 @@ pub struct FootfallPlan {
     /// Way-points of the smoothed swing from the lift way-point to the drop way-point,
     /// both included.
     pub swing_waypoints: usize,
+    /// The goal's joints pressed `press_m` further down: the last way-point the robot is
+    /// sent, so that the move ends where the wheel meets the ground even when the ground is
+    /// a little higher than the map says or the wheel a little short.
+    pub press_joints: Vec<f64>,
+    /// How far below its resting place the wheel is aimed, metres.
+    pub press_m: f64,
     /// Which planner found the swing: `astar`, `sbl`, or `sbl` after A* failed
     /// (`astar_failed`).
     pub planner: String,
@@ -209,6 +218,16 @@ impl FootfallPlan {
         serde_json::to_string_pretty(self).unwrap_or_default()
     }
 
+    /// The way-points a `legged.legMove` carries out (with a transition: the last segment
+    /// stops at ground contact): the plan's, the last pressed down.
+    pub fn leg_move_waypoints(&self) -> Vec<Vec<f64>> {
+        let mut w = self.waypoints.clone();
+        if let Some(last) = w.last_mut() {
+            last.clone_from(&self.press_joints);
+        }
+        w
+    }
+
     /// The whole motion, start included.
     pub fn full_path(&self) -> Vec<Vec<f64>> {
         let mut p = vec![self.start_joints.clone()];
@@ -216,6 +235,9 @@ impl FootfallPlan {
         p
     }
 }
+
+/// How far below its resting place a plan aims the wheel at the end, metres.
+pub const PRESS_M: f64 = 0.03;
 
 /// Plans steps for the legs of one scene, keeping each leg's collision checker (the
 /// terrain mesh is made once per leg and terrain raise).
@@ -285,14 +307,14 @@ impl StepPlanner {
         self.plan_with(leg, target, &self.options)
     }
 
-    /// Plans a step with other options (planner, heuristics, seeds) on the same scene.
-    pub fn plan_with(
+    /// The problem a step poses, checked: the target's verdict, the four configurations
+    /// (start, lift, drop, goal), the lift and drop checked, and the checker to plan with.
+    pub fn problem(
         &self,
         leg: usize,
         target: Point2<f64>,
         options: &PlanOptions,
-    ) -> Result<FootfallPlan, FootfallError> {
-        let started = Instant::now();
+    ) -> Result<StepProblem, FootfallError> {
         let scene = &*self.scene;
         let l = scene
             .model
@@ -309,7 +331,6 @@ impl StepPlanner {
         map.waypoint_m = options.lift_m();
         let eval = Evaluator::new(scene, leg, &map)?;
         let verdict = eval.evaluate(target, None);
-        // Without the heuristics a blue cell (no way-point 20 cm up) may still be stepped to.
         if verdict.colour != Colour::Green {
             return Err(bad(verdict
                 .reason
@@ -322,26 +343,22 @@ impl StepPlanner {
         let q_start = scene.posture[leg].clone();
         let start_centre = scene.foot_centre(leg, &q_start);
         let lift_centre = start_centre + Vector3::z() * options.lift_m();
-        let q_lift =
-            eval.place(&lift_centre, Some(&q_start))
-                .ok_or_else(|| FootfallError::NoPath {
-                    leg: name.clone(),
-                    reason: format!(
-                        "the way-point {:.0} cm above the foot's start cannot be reached",
-                        options.lift_m() * 100.0
-                    ),
-                })?;
+        let no_path = |reason: String| FootfallError::NoPath {
+            leg: name.clone(),
+            reason,
+        };
+        let q_lift = eval.place(&lift_centre, Some(&q_start)).ok_or_else(|| {
+            no_path(format!(
+                "the way-point {:.0} cm above the foot's start cannot be reached",
+                options.lift_m() * 100.0
+            ))
+        })?;
         // The goal and the drop way-point keep the start's steering angle.
         let (q_goal, q_drop) = (
             steer_like(&q_goal, &q_start, l),
             steer_like(&q_drop, &q_start, l),
         );
         let (checker, setup_ms) = self.checker(leg, options.raise_m())?;
-        let checks_before = checker.checks();
-        let no_path = |reason: String| FootfallError::NoPath {
-            leg: name.clone(),
-            reason,
-        };
         for (q, what) in [(&q_lift, "lift"), (&q_drop, "drop")] {
             if let Some(hit) = checker.check(q, Phase::Free) {
                 return Err(no_path(format!("the {what} way-point collides: {hit}")));
@@ -353,11 +370,42 @@ impl StepPlanner {
         if let Err((_, hit)) = checker.segment(&q_drop, &q_goal, Phase::LiftOrDrop) {
             return Err(no_path(format!("the drop collides: {hit}")));
         }
-        let active: Vec<usize> = (0..l.dof())
+        let active = (0..l.dof())
             .filter(|&i| !(has_steering_axis(l) && i + 1 == l.dof()))
             .collect();
-        let mut times = PlanTimes {
+        Ok(StepProblem {
+            leg,
+            leg_name: name,
+            target,
+            q_start,
+            q_lift,
+            q_drop,
+            q_goal,
+            active,
+            checker,
             setup_ms,
+            map,
+        })
+    }
+
+    /// Plans a step with other options (planner, heuristics, seeds) on the same scene.
+    pub fn plan_with(
+        &self,
+        leg: usize,
+        target: Point2<f64>,
+        options: &PlanOptions,
+    ) -> Result<FootfallPlan, FootfallError> {
+        let started = Instant::now();
+        let p = self.problem(leg, target, options)?;
+        let scene = &*self.scene;
+        let checker = p.checker.clone();
+        let checks_before = checker.checks();
+        let no_path = |reason: String| FootfallError::NoPath {
+            leg: p.leg_name.clone(),
+            reason,
+        };
+        let mut times = PlanTimes {
+            setup_ms: p.setup_ms,
             ..PlanTimes::default()
         };
         let mut astar_failed = false;
@@ -366,14 +414,18 @@ impl StepPlanner {
         let mut found = None;
         if options.planner == PlannerKind::Astar {
             let t = Instant::now();
-            match astar(&checker, &eval, &q_lift, &q_drop, &options.astar) {
+            let eval = Evaluator::new(scene, leg, &p.map)?;
+            match astar(&checker, &eval, &p.q_lift, &p.q_drop, &options.astar) {
                 Ok(o) => {
                     expansions = o.expansions;
                     found = Some((o.path, "astar"));
                 }
                 Err(why) => {
-                    tracing::debug!(%why, "A* found no way; SBL plans instead");
+                    tracing::debug!(%why, "A* found no way");
                     astar_failed = true;
+                    if !options.astar_fallback {
+                        return Err(no_path(why));
+                    }
                 }
             }
             times.astar_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -382,13 +434,15 @@ impl StepPlanner {
             Some(f) => f,
             None => {
                 let t = Instant::now();
-                let o = sbl(&checker, &q_lift, &q_drop, &active, &options.sbl).map_err(|why| {
-                    no_path(if astar_failed {
-                        format!("A* found no way, and {why}")
-                    } else {
-                        why
-                    })
-                })?;
+                let o = sbl(&checker, &p.q_lift, &p.q_drop, &p.active, &options.sbl).map_err(
+                    |why| {
+                        no_path(if astar_failed {
+                            format!("A* found no way, and {why}")
+                        } else {
+                            why
+                        })
+                    },
+                )?;
                 times.sbl_ms = t.elapsed().as_secs_f64() * 1e3;
                 milestones = o.milestones;
                 (o.path, "sbl")
@@ -399,31 +453,34 @@ impl StepPlanner {
         times.smooth_ms = t.elapsed().as_secs_f64() * 1e3;
         let swing = smoothed.path;
         let mut waypoints: Vec<Vec<f64>> = swing.clone();
-        waypoints.push(q_goal.clone());
+        waypoints.push(p.q_goal.clone());
         // The final dense check of everything the robot will do.
         let t = Instant::now();
         if let Some((_, hit)) = checker.path_dense(&swing, Phase::Free) {
             return Err(no_path(format!("the smoothed swing collides: {hit}")));
         }
-        for (a, b) in [(&q_start, &q_lift), (&q_drop, &q_goal)] {
+        for (a, b) in [(&p.q_start, &p.q_lift), (&p.q_drop, &p.q_goal)] {
             if let Some((_, hit)) = checker.path_dense(&[a.clone(), b.clone()], Phase::LiftOrDrop) {
                 return Err(no_path(format!("the lift or drop collides: {hit}")));
             }
         }
         times.verify_ms = t.elapsed().as_secs_f64() * 1e3;
-        let mut full = vec![q_start.clone()];
+        let (press_joints, press_m) = press(scene, leg, &p, &Evaluator::new(scene, leg, &p.map)?);
+        let mut full = vec![p.q_start.clone()];
         full.extend(waypoints.iter().cloned());
         let foot_path = foot_trace(scene, leg, &full, options.resolution_rad);
-        times.total_ms = started.elapsed().as_secs_f64() * 1e3 - setup_ms;
+        times.total_ms = started.elapsed().as_secs_f64() * 1e3 - p.setup_ms;
         let body = scene.body.translation.vector;
         Ok(FootfallPlan {
             robot: scene.model.name().to_owned(),
-            leg: name,
+            leg: p.leg_name.clone(),
             target: [target.x, target.y],
-            start_joints: q_start,
+            start_joints: p.q_start.clone(),
             body_position: [body.x, body.y, body.z],
             swing_waypoints: swing.len(),
             waypoints,
+            press_joints,
+            press_m,
             planner: planner.to_owned(),
             astar_failed,
             heuristics: options.heuristics,
@@ -436,6 +493,55 @@ impl StepPlanner {
             times,
         })
     }
+}
+
+/// A step's problem: its four configurations, checked, and the checker to plan with.
+#[derive(Debug, Clone)]
+pub struct StepProblem {
+    /// The leg.
+    pub leg: usize,
+    /// Its name.
+    pub leg_name: String,
+    /// The target, world XY.
+    pub target: Point2<f64>,
+    /// The leg's joints now.
+    pub q_start: Vec<f64>,
+    /// At the lift way-point.
+    pub q_lift: Vec<f64>,
+    /// At the drop way-point.
+    pub q_drop: Vec<f64>,
+    /// On the target.
+    pub q_goal: Vec<f64>,
+    /// The joints the swing moves (all but a wheel's steering).
+    pub active: Vec<usize>,
+    /// The checker, against the terrain raised as the options say.
+    pub checker: Arc<LegChecker>,
+    /// Time spent making the checker, milliseconds (0 when it was made before).
+    pub setup_ms: f64,
+    /// The maps' rules used (way-point height as the options say).
+    pub map: MapParams,
+}
+
+/// The goal pressed down [`PRESS_M`] (with the wheel upright, else by position only, else
+/// less), and how far.
+fn press(scene: &Scene, leg: usize, p: &StepProblem, eval: &Evaluator<'_>) -> (Vec<f64>, f64) {
+    let l = &scene.model.legs()[leg];
+    let goal = scene.foot_centre(leg, &p.q_goal);
+    for depth in [PRESS_M, PRESS_M / 2.0] {
+        let centre = goal - Vector3::z() * depth;
+        if let Some(q) = eval.place(&centre, Some(&p.q_goal)) {
+            return (steer_like(&q, &p.q_start, l), depth);
+        }
+        let target = scene.body.inverse() * centre;
+        let options = tca_legged_model::IkOptions {
+            random_starts: 0,
+            ..tca_legged_model::IkOptions::starting_at(&p.q_goal)
+        };
+        if let Ok(s) = l.inverse_kinematics(&target, &options) {
+            return (steer_like(&s.joints, &p.q_start, l), depth);
+        }
+    }
+    (p.q_goal.clone(), 0.0)
 }
 
 /// `q` with the steering joint (the last, when the leg has one) set as in `like`.

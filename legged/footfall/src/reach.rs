@@ -90,6 +90,18 @@ pub fn place_foot(
     starts: &[&[f64]],
     tolerance: &ReachTolerance,
 ) -> Option<Vec<f64>> {
+    place_foot_where(leg, goal, starts, tolerance, |_| true)
+}
+
+/// As [`place_foot`], taking the first solution `accept` accepts (say, one that keeps the
+/// leg clear of the rest of the robot): a foot can often be placed in several ways.
+pub fn place_foot_where(
+    leg: &Leg,
+    goal: &FootGoal,
+    starts: &[&[f64]],
+    tolerance: &ReachTolerance,
+    accept: impl Fn(&[f64]) -> bool,
+) -> Option<Vec<f64>> {
     let beyond = (goal.centre - leg.base_position()).norm() - leg.reach_bound();
     if beyond > tolerance.position_m || !goal.centre.coords.iter().all(|v| v.is_finite()) {
         return None;
@@ -97,11 +109,12 @@ pub fn place_foot(
     starts
         .iter()
         .filter(|s| s.len() == leg.dof())
-        .find_map(|s| descend(leg, goal, leg.clamp(s), tolerance))
+        .filter_map(|s| descend(leg, goal, leg.clamp(s), tolerance))
+        .find(|q| accept(q))
 }
 
-/// As [`place_foot`], then from `random` random starts drawn with `seed` (the brute-force
-/// check's exhaustive search).
+/// As [`place_foot_where`], then from `random` random starts drawn with `seed` (the
+/// brute-force check's exhaustive search).
 pub fn place_foot_thoroughly(
     leg: &Leg,
     goal: &FootGoal,
@@ -109,8 +122,9 @@ pub fn place_foot_thoroughly(
     random: usize,
     seed: u64,
     tolerance: &ReachTolerance,
+    accept: impl Fn(&[f64]) -> bool,
 ) -> Option<Vec<f64>> {
-    if let Some(q) = place_foot(leg, goal, starts, tolerance) {
+    if let Some(q) = place_foot_where(leg, goal, starts, tolerance, &accept) {
         return Some(q);
     }
     let beyond = (goal.centre - leg.base_position()).norm() - leg.reach_bound();
@@ -131,7 +145,7 @@ pub fn place_foot_thoroughly(
         if let (Some(s), Some(last)) = (steer, q.last_mut()) {
             *last = s;
         }
-        if let Some(q) = descend(leg, goal, q, tolerance) {
+        if let Some(q) = descend(leg, goal, q, tolerance).filter(|q| accept(q)) {
             return Some(q);
         }
     }
@@ -183,9 +197,7 @@ fn descend(
         let foot = leg.foot_position(&q).ok()?;
         let axis_now = foot_axis(leg, &q);
         let mut jac = DMatrix::<f64>::zeros(rows, n);
-        for i in 0..n {
-            let joint = &leg.joints()[i];
-            let frame = &frames[i];
+        for (i, (joint, frame)) in leg.joints().iter().zip(&frames).take(n).enumerate() {
             match joint.kind() {
                 JointKind::Revolute { axis } => {
                     let w = frame.rotation * axis.into_inner();
@@ -342,7 +354,16 @@ mod tests {
         };
         assert!(place_foot(leg, &goal, &[&q0], &ReachTolerance::default()).is_none());
         assert!(
-            place_foot_thoroughly(leg, &goal, &[&q0], 16, 1, &ReachTolerance::default()).is_none()
+            place_foot_thoroughly(
+                leg,
+                &goal,
+                &[&q0],
+                16,
+                1,
+                &ReachTolerance::default(),
+                |_| true
+            )
+            .is_none()
         );
     }
 

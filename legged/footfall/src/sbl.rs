@@ -314,9 +314,8 @@ fn test_path(
                 .segment_level(&s.from, &s.to, level, Phase::Free)
                 .is_some()
             {
-                match s.edge {
-                    Some((tree, child)) => trees[tree].cut(child),
-                    None => {}
+                if let Some((tree, child)) = s.edge {
+                    trees[tree].cut(child);
                 }
                 return None;
             }

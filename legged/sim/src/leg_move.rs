@@ -254,10 +254,19 @@ impl LeggedSim {
                 let f = n as f64 / seg.samples as f64;
                 let q = seg.at(f);
                 // Where the leg really is: the body and the limb sagging under load.
-                let (body, q_real, taken) = self.sagged(i, &q, true);
-                self.take_sag(taken);
+                let real = self.sagged(i, &q, true);
+                self.take_sag(&real);
+                let (body, q_real) = (real.body, real.q.clone());
                 posture[i] = q_real.clone();
                 report.samples += 1;
+                if real.drag_m > crate::sag::DRAG_TOLERANCE_M && !in_transition {
+                    // A foot still bearing load, moved sideways: dragged across the ground.
+                    let at = body
+                        * l.foot_position(&q_real)
+                            .unwrap_or_else(|_| nalgebra::Point3::origin());
+                    let hits = vec![(l.foot_link().to_owned(), at)];
+                    return Err(self.stop_on_collision(report, i, reached, hits));
+                }
                 let hits = self.link_contacts(&body, &posture, Some(i));
                 if !hits.is_empty() {
                     return Err(self.stop_on_collision(report, i, reached, hits));
@@ -273,7 +282,8 @@ impl LeggedSim {
                 if in_transition && clearance <= 0.0 {
                     // Touch-down between the previous sample and this one.
                     let f = self.contact_fraction(i, seg, prev_f, f);
-                    let (body, q_real, _) = self.sagged(i, &seg.at(f), false);
+                    let real = self.sagged(i, &seg.at(f), false);
+                    let (body, q_real) = (real.body, real.q);
                     let centre = body
                         * l.foot_position(&q_real)
                             .unwrap_or_else(|_| nalgebra::Point3::origin());
@@ -333,8 +343,8 @@ impl LeggedSim {
     /// touching already), touching at `hi`.
     fn contact_fraction(&self, i: usize, seg: &Segment, lo: f64, hi: f64) -> f64 {
         let clear = |f: f64| {
-            let (body, q, _) = self.sagged(i, &seg.at(f), false);
-            self.clearance(&body, i, &q)
+            let s = self.sagged(i, &seg.at(f), false);
+            self.clearance(&s.body, i, &s.q)
         };
         if clear(lo) <= 0.0 {
             return lo;

@@ -11,14 +11,20 @@
 //!
 //! The load comes off the lifting foot gradually: while its commanded rise is less than the
 //! full sag at the foot, the body sinks by as much as the foot is raised and the foot stays
-//! on the ground; beyond that the robot hangs fully sagged and the foot rises by the
-//! difference. So a lift commanded to 20 cm leaves the foot lower by the sag, or on the
-//! ground when the sag is larger. When the foot is put down again the load returns and the
-//! body rises back; the foot stays where it touched.
+//! on the ground, still bearing load; beyond that the robot hangs fully sagged and the foot
+//! rises by the difference. So a lift commanded to 20 cm leaves the foot lower by the sag,
+//! or on the ground when the sag is larger. A foot still on the ground that is moved more
+//! than [`DRAG_TOLERANCE_M`] sideways is dragged across the ground: a collision. When the
+//! foot is put down again the load returns and the body rises back; the foot stays where it
+//! touched.
 
 use nalgebra::{Isometry3, Matrix3, Point3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use tca_legged_model::{JointKind, RobotModel};
+
+/// How far a foot still bearing load may move sideways before it counts as dragged,
+/// metres.
+pub const DRAG_TOLERANCE_M: f64 = 0.01;
 
 /// Standard gravity, m/s².
 pub(crate) const GRAVITY: f64 = 9.80665;
@@ -74,12 +80,13 @@ pub(crate) struct Sag {
     pub(crate) leg: usize,
     /// The body's full displacement, in the body frame.
     pub(crate) body: Isometry3<f64>,
-    /// How far the foot's centre sits lower when fully sagged, at lift-off, metres.
-    pub(crate) foot_drop_m: f64,
-    /// The foot centre's height at lift-off (world, as commanded), metres.
-    pub(crate) from_z: f64,
-    /// The fraction of the sag taken, 0..1; only grows while the leg is in the air.
+    /// The foot's centre at lift-off, world frame.
+    pub(crate) from: Point3<f64>,
+    /// The share of the sag taken, 0..1.
     pub(crate) taken: f64,
+    /// Whether the foot has left the ground (the whole sag taken); from then on it stays
+    /// fully sagged until it is put down.
+    pub(crate) lifted: bool,
 }
 
 /// The plane of spring deflections `h + a x + b y` (body frame) that carries `weight` with

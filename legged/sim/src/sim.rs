@@ -232,8 +232,8 @@ impl LeggedSim {
     /// [`Self::foot_centres`].
     pub fn real_foot_centre(&self, leg: usize) -> Option<Point3<f64>> {
         let l = self.model.legs().get(leg)?;
-        let (body, q, _) = self.sagged(leg, &self.posture[leg], false);
-        Some(body * l.foot_position(&q).ok()?)
+        let s = self.sagged(leg, &self.posture[leg], false);
+        Some(s.body * l.foot_position(&s.q).ok()?)
     }
 
     /// How far the lifted leg's foot sits below where its joints put it, metres (0 when the
@@ -445,17 +445,13 @@ impl LeggedSim {
             params.leg_stiffness_n_per_m,
         );
         let l = &self.model.legs()[i];
-        let q0 = &self.posture[i];
-        let nominal = self.body * l.foot_position(q0).ok()?;
-        let droop = self.droop(i, q0);
-        let q1: Vec<f64> = q0.iter().zip(&droop).map(|(a, d)| a + d).collect();
-        let sagged = self.body * body * l.foot_position(&q1).ok()?;
+        let nominal = self.body * l.foot_position(&self.posture[i]).ok()?;
         Some(crate::sag::Sag {
             leg: i,
             body,
-            foot_drop_m: nominal.z - sagged.z,
-            from_z: nominal.z,
+            from: nominal,
             taken: 0.0,
+            lifted: false,
         })
     }
 
@@ -476,39 +472,71 @@ impl LeggedSim {
     }
 
     /// The body pose and the leg's joints as they really are when leg `i` is commanded to
-    /// `q`: sagged as far as the load has come off the foot (`update`: let a higher foot
-    /// take more of the sag), or as commanded when the robot does not sag.
-    /// Also returns the fraction of the sag taken, to be kept with [`Self::take_sag`].
-    pub(crate) fn sagged(
-        &self,
-        i: usize,
-        q: &[f64],
-        update: bool,
-    ) -> (Isometry3<f64>, Vec<f64>, f64) {
+    /// `q`, and the sag taken (see [`crate::sag`]); as commanded when the robot does not
+    /// sag. With `update` the share of the load off a foot not yet lifted off follows `q`;
+    /// without, the share last kept ([`Self::take_sag`]) is used.
+    pub(crate) fn sagged(&self, i: usize, q: &[f64], update: bool) -> Sagged {
         let Some(sag) = self.sag.as_ref().filter(|s| s.leg == i) else {
-            return (self.body, q.to_vec(), 0.0);
+            return Sagged {
+                body: self.body,
+                q: q.to_vec(),
+                taken: 0.0,
+                lifted: true,
+                drag_m: 0.0,
+            };
         };
         let l = &self.model.legs()[i];
-        let mut taken = sag.taken;
-        if update {
-            let z = (self.body * l.foot_position(q).unwrap_or_else(|_| Point3::origin())).z;
-            let want = if sag.foot_drop_m > 1e-9 {
-                ((z - sag.from_z) / sag.foot_drop_m).clamp(0.0, 1.0)
-            } else {
-                1.0
-            };
-            taken = taken.max(want);
-        }
-        let body = self.body * crate::sag::partial(&sag.body, taken);
         let droop = self.droop(i, q);
-        let real = q.iter().zip(&droop).map(|(a, d)| a + taken * d).collect();
-        (body, real, taken)
+        let real = |t: f64| {
+            let body = self.body * crate::sag::partial(&sag.body, t);
+            let q: Vec<f64> = q.iter().zip(&droop).map(|(a, d)| a + t * d).collect();
+            body * l.foot_position(&q).unwrap_or_else(|_| Point3::origin())
+        };
+        let (mut taken, mut lifted) = (sag.taken, sag.lifted);
+        if update && !lifted {
+            // The share of the load off the foot: the robot sags until the foot would go
+            // below where it lifted off, so that it leaves the ground only once the
+            // commanded rise exceeds the full sag (found by bisection: the foot sinks as
+            // the sag grows).
+            if real(1.0).z >= sag.from.z {
+                (taken, lifted) = (1.0, true);
+            } else if real(0.0).z <= sag.from.z {
+                taken = 0.0;
+            } else {
+                let (mut lo, mut hi) = (0.0, 1.0);
+                for _ in 0..24 {
+                    let mid = 0.5 * (lo + hi);
+                    if real(mid).z >= sag.from.z {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                taken = lo;
+            }
+        }
+        // Dragged: the foot commanded away sideways while it still bears load (the sag's
+        // own sideways give is the structure bending over the pinned foot, not a drag).
+        let commanded = self.body * l.foot_position(q).unwrap_or_else(|_| Point3::origin());
+        let drag_m = if lifted {
+            0.0
+        } else {
+            (commanded.x - sag.from.x).hypot(commanded.y - sag.from.y)
+        };
+        Sagged {
+            body: self.body * crate::sag::partial(&sag.body, taken),
+            q: q.iter().zip(&droop).map(|(a, d)| a + taken * d).collect(),
+            taken,
+            lifted,
+            drag_m,
+        }
     }
 
-    /// Keeps the fraction of the sag the lifted leg has taken.
-    pub(crate) fn take_sag(&mut self, taken: f64) {
-        if let Some(s) = self.sag.as_mut() {
-            s.taken = taken;
+    /// Keeps the share of the sag the lifted leg has taken.
+    pub(crate) fn take_sag(&mut self, s: &Sagged) {
+        if let Some(sag) = self.sag.as_mut() {
+            sag.taken = s.taken;
+            sag.lifted = s.lifted;
         }
     }
 
@@ -565,6 +593,20 @@ impl LeggedSim {
             standing: self.standing_legs(),
         }
     }
+}
+
+/// Where a leg really is (see [`LeggedSim::sagged`]).
+pub(crate) struct Sagged {
+    /// The body's pose.
+    pub(crate) body: Isometry3<f64>,
+    /// The leg's joints.
+    pub(crate) q: Vec<f64>,
+    /// The share of the sag taken.
+    pub(crate) taken: f64,
+    /// Whether the foot has left the ground.
+    pub(crate) lifted: bool,
+    /// How far a foot still bearing load is commanded sideways from where it stood, metres.
+    pub(crate) drag_m: f64,
 }
 
 /// Whether a margin falls short of a minimum (a NaN margin always does).
