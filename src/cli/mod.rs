@@ -4,6 +4,7 @@ mod bus;
 mod central;
 mod chaos;
 mod course;
+mod footfall;
 mod foxglove;
 mod legged_walk;
 mod log;
@@ -84,6 +85,10 @@ enum Command {
     /// Navigate toward a goal given relative to the start over terrain discovered on the way
     /// (depth camera, drifting odometry, danger map, D* Lite).
     Navigate(navigate::NavigateArgs),
+    /// FootFall for an ATHLETE-like rover: one leg's reachability and stability maps, a
+    /// step planned (A* or SBL) and previewed, sent to the robot; the acceptance campaign.
+    #[command(subcommand)]
+    Footfall(footfall::FootfallCommand),
 }
 
 /// Where to find central (shared by the commands that connect).
@@ -200,6 +205,7 @@ pub(crate) fn main() -> ExitCode {
             Command::Foxglove(args) => foxglove::run(args).await,
             Command::Plan(cmd) => plan::run(cmd).await,
             Command::Navigate(args) => navigate::run_navigate(args).await,
+            Command::Footfall(cmd) => footfall::run(cmd).await,
         }
     });
     match result {

@@ -8,6 +8,7 @@ pub mod error;
 pub mod ground;
 pub mod maps;
 pub mod margins;
+pub mod picture;
 pub mod plan;
 pub mod reach;
 pub mod reference;
@@ -18,4 +19,5 @@ pub mod terrain;
 pub mod verify;
 
 pub use error::{FootfallError, Result};
+pub use nalgebra;
 pub use scene::Scene;

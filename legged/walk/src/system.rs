@@ -37,6 +37,8 @@ pub struct LeggedSetup {
     pub faults: Vec<InjectedFault>,
     /// What plans the steps.
     pub planner: LeggedPlanner,
+    /// The simulated Controller's robot sags under load (`None`: rigid).
+    pub sag: Option<tca_legged_sim::SagParams>,
 }
 
 /// What plans a legged walk's steps.
@@ -109,7 +111,10 @@ pub async fn connect_module(
                 urdf: setup.urdf.clone(),
                 terrain: setup.terrain.clone(),
                 start: setup.start,
-                params: SimParams::for_model(&setup.model),
+                params: SimParams {
+                    sag: setup.sag,
+                    ..SimParams::for_model(&setup.model)
+                },
                 module_name: "controller".into(),
                 faults: setup.faults.clone(),
             };
