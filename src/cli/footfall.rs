@@ -17,8 +17,8 @@ use tca_footfall::picture::{draw_maps, draw_plan};
 use tca_footfall::plan::{FootfallPlan, PlanOptions, PlannerKind, StepPlanner};
 use tca_footfall::verify::check_plan;
 use tca_footfall_bus::{
-    FootfallMaps, FootfallPlanStep, FootfallSetup, Telemetry, TerrainSource,
-    scene_from_telemetry, send_plan,
+    FootfallMaps, FootfallPlanStep, FootfallSetup, Telemetry, TerrainSource, scene_from_telemetry,
+    send_plan,
 };
 use tca_legged_sim::StartPose;
 use tca_messages::control::TaskOutcome;
@@ -284,7 +284,11 @@ async fn scene_over_bus(op: &Module, setup: &FootfallSetup) -> anyhow::Result<Sc
         .map_err(|e| anyhow::anyhow!("{e}"))
 }
 
-fn write_png(canvas: &tca_footfall::picture::Canvas, dir: &Path, name: &str) -> anyhow::Result<PathBuf> {
+fn write_png(
+    canvas: &tca_footfall::picture::Canvas,
+    dir: &Path,
+    name: &str,
+) -> anyhow::Result<PathBuf> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let path = dir.join(name);
     canvas
@@ -354,7 +358,11 @@ async fn maps(a: MapsArgs) -> anyhow::Result<ExitCode> {
         print_maps(&maps, &what, seconds);
     }
     if let (Some(dir), Some(scene)) = (&a.png, &scene) {
-        let path = write_png(&draw_maps(scene, &maps, PPM), dir, &format!("maps-{}.png", maps.leg))?;
+        let path = write_png(
+            &draw_maps(scene, &maps, PPM),
+            dir,
+            &format!("maps-{}.png", maps.leg),
+        )?;
         if !a.json {
             println!("  wrote {}", path.display());
         }
@@ -426,7 +434,9 @@ async fn plan(a: PlanArgs) -> anyhow::Result<ExitCode> {
             let scene = Arc::new(setup.scene()?);
             let leg = scene.leg_index(&a.leg)?;
             let planner = StepPlanner::new(scene.clone(), options.clone())?;
-            let result = planner.plan(leg, target).map_err(|e| anyhow::anyhow!("{e}"));
+            let result = planner
+                .plan(leg, target)
+                .map_err(|e| anyhow::anyhow!("{e}"));
             (scene, result)
         }
     };
@@ -434,7 +444,10 @@ async fn plan(a: PlanArgs) -> anyhow::Result<ExitCode> {
         Ok(p) => p,
         Err(e) => {
             if a.json {
-                println!("{}", serde_json::json!({"planned": false, "reason": e.to_string()}));
+                println!(
+                    "{}",
+                    serde_json::json!({"planned": false, "reason": e.to_string()})
+                );
             } else {
                 eprintln!("no plan: {e}");
             }
@@ -452,7 +465,8 @@ async fn plan(a: PlanArgs) -> anyhow::Result<ExitCode> {
     )?;
     if let Some(path) = &a.out {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
         }
         std::fs::write(path, plan.to_json())
             .with_context(|| format!("cannot write {}", path.display()))?;
@@ -464,7 +478,11 @@ async fn plan(a: PlanArgs) -> anyhow::Result<ExitCode> {
             plan.target[0],
             plan.target[1],
             plan.planner,
-            if plan.astar_failed { " (A* found no way)" } else { "" },
+            if plan.astar_failed {
+                " (A* found no way)"
+            } else {
+                ""
+            },
             plan.swing_waypoints,
             plan.times.total_ms
         );
@@ -491,13 +509,21 @@ async fn plan(a: PlanArgs) -> anyhow::Result<ExitCode> {
             plan.swing_length_rad[0]
         );
         if let Some(path) = &a.out {
-            println!("  wrote {} (send it with `tca footfall send {}`)", path.display(), path.display());
+            println!(
+                "  wrote {} (send it with `tca footfall send {}`)",
+                path.display(),
+                path.display()
+            );
         }
     }
     if let Some(dir) = &a.png {
         let leg = scene.leg_index(&plan.leg)?;
         let maps = leg_maps(&scene, leg, &options.map)?;
-        let path = write_png(&draw_plan(&scene, &maps, &plan, PPM), dir, &format!("plan-{}.png", plan.leg))?;
+        let path = write_png(
+            &draw_plan(&scene, &maps, &plan, PPM),
+            dir,
+            &format!("plan-{}.png", plan.leg),
+        )?;
         if !a.json {
             println!("  wrote {}", path.display());
         }
@@ -516,7 +542,10 @@ async fn send(a: SendArgs) -> anyhow::Result<ExitCode> {
         .with_context(|| format!("cannot read the plan {}", a.plan.display()))?;
     let plan = FootfallPlan::from_json(&text)?;
     if !(a.timeout.is_finite() && a.timeout > 0.0) {
-        anyhow::bail!("--timeout {} is not valid; give a positive number of seconds", a.timeout);
+        anyhow::bail!(
+            "--timeout {} is not valid; give a positive number of seconds",
+            a.timeout
+        );
     }
     let endpoint = a
         .connect
@@ -547,7 +576,11 @@ async fn send(a: SendArgs) -> anyhow::Result<ExitCode> {
                     println!(
                         "  {at:7.2} s  {} {} at ({:.3}, {:.3}, {:.3})",
                         c.leg,
-                        if c.stance { "touched down" } else { "lifted off" },
+                        if c.stance {
+                            "touched down"
+                        } else {
+                            "lifted off"
+                        },
                         c.at.x_m,
                         c.at.y_m,
                         c.at.z_m
@@ -632,7 +665,8 @@ async fn campaign(a: CampaignArgs) -> anyhow::Result<ExitCode> {
     let s = &report.summary;
     if let Some(path) = &a.out {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
         }
         std::fs::write(path, serde_json::to_string_pretty(&report)?)
             .with_context(|| format!("cannot write {}", path.display()))?;

@@ -91,7 +91,11 @@ async fn scene_now(
     terrain: &Arc<HeightField>,
     cache: &Mutex<Cache>,
 ) -> Result<Scene, HandlerError> {
-    let known = cache.lock().unwrap_or_else(|p| p.into_inner()).model.clone();
+    let known = cache
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .model
+        .clone();
     let scene = scene_from_telemetry(ctx, terrain, known)
         .await
         .map_err(HandlerError::new)?;
@@ -121,7 +125,10 @@ fn planner_for(
 }
 
 /// Connects the planner module and serves until it is dropped or closed.
-pub async fn connect_planner(connector: &Connector, config: PlannerConfig) -> Result<Module, ModuleError> {
+pub async fn connect_planner(
+    connector: &Connector,
+    config: PlannerConfig,
+) -> Result<Module, ModuleError> {
     let cache = Arc::new(Mutex::new(Cache::default()));
     let config = Arc::new(config);
     Module::builder(config.module_name.clone())
@@ -132,7 +139,9 @@ pub async fn connect_planner(connector: &Connector, config: PlannerConfig) -> Re
                 let (cache, config) = (cache.clone(), config.clone());
                 async move {
                     let scene = scene_now(&ctx, &config.terrain, &cache).await?;
-                    let leg = scene.leg_index(&q.leg).map_err(|e| HandlerError::new(e.to_string()))?;
+                    let leg = scene
+                        .leg_index(&q.leg)
+                        .map_err(|e| HandlerError::new(e.to_string()))?;
                     let mut params = config.options.map.clone();
                     if let Some(p) = q.polygon {
                         params.polygon = p;
@@ -152,7 +161,9 @@ pub async fn connect_planner(connector: &Connector, config: PlannerConfig) -> Re
             let (cache, config) = (cache.clone(), config.clone());
             async move {
                 let scene = scene_now(&ctx, &config.terrain, &cache).await?;
-                let leg = scene.leg_index(&q.leg).map_err(|e| HandlerError::new(e.to_string()))?;
+                let leg = scene
+                    .leg_index(&q.leg)
+                    .map_err(|e| HandlerError::new(e.to_string()))?;
                 let mut options = config.options.clone();
                 options.planner = q.planner;
                 if !q.heuristics {

@@ -76,7 +76,8 @@ impl TerrainSource {
 /// A robot and its URDF text: a shipped one by name, or a file.
 pub fn load_robot(name_or_path: &str) -> Result<(RobotModel, String), FootfallError> {
     if let Some(b) = BUILTIN_ROBOTS.iter().find(|r| r.name == name_or_path) {
-        let model = RobotModel::from_urdf_str(b.urdf).map_err(|e| FootfallError::Scene(e.to_string()))?;
+        let model =
+            RobotModel::from_urdf_str(b.urdf).map_err(|e| FootfallError::Scene(e.to_string()))?;
         return Ok((model, b.urdf.to_owned()));
     }
     let text = std::fs::read_to_string(name_or_path).map_err(|e| {
@@ -90,7 +91,8 @@ pub fn load_robot(name_or_path: &str) -> Result<(RobotModel, String), FootfallEr
                 .join(", ")
         ))
     })?;
-    let model = RobotModel::from_urdf_str(&text).map_err(|e| FootfallError::Scene(e.to_string()))?;
+    let model =
+        RobotModel::from_urdf_str(&text).map_err(|e| FootfallError::Scene(e.to_string()))?;
     Ok((model, text))
 }
 
@@ -121,7 +123,9 @@ impl Default for FootfallSetup {
 
 impl FootfallSetup {
     /// The robot, its URDF, the terrain and the start.
-    pub fn load(&self) -> Result<(Arc<RobotModel>, String, Arc<HeightField>, StartPose), FootfallError> {
+    pub fn load(
+        &self,
+    ) -> Result<(Arc<RobotModel>, String, Arc<HeightField>, StartPose), FootfallError> {
         let (model, urdf) = load_robot(&self.robot)?;
         let (terrain, course_start) = self.terrain.load()?;
         let start = self.start.or(course_start).ok_or_else(|| {

@@ -10,8 +10,8 @@ use tca_central::StartOptions;
 use tca_footfall::maps::Colour;
 use tca_footfall::plan::{PlanOptions, PlannerKind};
 use tca_footfall_bus::{
-    EXECUTOR_MODULE, FootfallMaps, FootfallPlanStep, FootfallSetup, PLANNER_MODULE,
-    PlannerConfig, Telemetry, connect_executor, connect_planner, send_plan,
+    EXECUTOR_MODULE, FootfallMaps, FootfallPlanStep, FootfallSetup, PLANNER_MODULE, PlannerConfig,
+    Telemetry, connect_executor, connect_planner, send_plan,
 };
 use tca_legged_controller::{LeggedControllerConfig, connect};
 use tca_legged_messages::LegState;
@@ -22,7 +22,9 @@ use tca_testkit::within;
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn maps_plan_send_and_the_telemetry_comes_back() {
     within("the FootFall loop on the bus", async {
-        let central = tca_central::start(StartOptions::simulated(None)).await.unwrap();
+        let central = tca_central::start(StartOptions::simulated(None))
+            .await
+            .unwrap();
         let connector = Connector::from(central.in_process());
         let setup = FootfallSetup::default();
         let (model, urdf, terrain, start) = setup.load().unwrap();
@@ -43,7 +45,10 @@ async fn maps_plan_send_and_the_telemetry_comes_back() {
         )
         .await
         .unwrap();
-        let operator = Module::builder("operator").connect(&connector).await.unwrap();
+        let operator = Module::builder("operator")
+            .connect(&connector)
+            .await
+            .unwrap();
 
         let maps = operator
             .query(&FootfallMaps {

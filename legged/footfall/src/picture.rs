@@ -21,6 +21,19 @@ const CONSERVATIVE: Rgb = [255, 230, 40];
 const ROBOT: Rgb = [150, 150, 160];
 const GHOST: Rgb = [120, 240, 255];
 const TARGET: Rgb = [255, 60, 255];
+const TEXT: Rgb = [230, 230, 230];
+/// The narrowest picture, pixels: room for the legend.
+const MIN_WIDTH_PX: f64 = 900.0;
+
+/// Writes a line of text at scale 2, or 1 when that does not fit.
+fn label(c: &mut Canvas, x: i64, y: i64, text: &str) {
+    let scale = if i64::from(tca_canvas::font::text_width(text, 2)) + x < i64::from(c.width()) {
+        2
+    } else {
+        1
+    };
+    c.text(x, y, text, scale, TEXT);
+}
 
 fn colour_of(c: Colour) -> Rgb {
     match c {
@@ -59,9 +72,8 @@ impl View {
 /// The maps of one leg with the robot and its polygons, seen from above, `ppm` pixels per
 /// metre.
 pub fn draw_maps(scene: &Scene, maps: &LegMaps, ppm: f64) -> Canvas {
-    let (view, mut c) = top_view(scene, maps, ppm);
+    let (_, mut c) = top_view(scene, maps, ppm);
     legend(&mut c, scene, maps);
-    let _ = &view;
     c
 }
 
@@ -77,11 +89,21 @@ fn top_view(scene: &Scene, maps: &LegMaps, ppm: f64) -> (View, Canvas) {
         lo = Point2::new(lo.x.min(p.x - 0.5), lo.y.min(p.y - 0.5));
         hi = Point2::new(hi.x.max(p.x + 0.5), hi.y.max(p.y + 0.5));
     }
+    // Wide enough for the legend.
+    let min_w = MIN_WIDTH_PX / ppm;
+    if hi.x - lo.x < min_w {
+        let pad = 0.5 * (min_w - (hi.x - lo.x));
+        lo.x -= pad;
+        hi.x += pad;
+    }
     let view = View { lo, hi, ppm };
     let (w, h) = view.size();
     let mut c = Canvas::new(w, h + 40, [20, 20, 24]);
     let t = &scene.terrain;
-    let (zmin, zmax) = (t.min_height_m(), t.max_height_m().max(t.min_height_m() + 1e-6));
+    let (zmin, zmax) = (
+        t.min_height_m(),
+        t.max_height_m().max(t.min_height_m() + 1e-6),
+    );
     for py in 0..h {
         for px in 0..w {
             let x = lo.x + (f64::from(px) + 0.5) / ppm;
@@ -97,7 +119,8 @@ fn top_view(scene: &Scene, maps: &LegMaps, ppm: f64) -> (View, Canvas) {
             if let Some((ix, iy)) = maps.cell_of(Point2::new(x, y))
                 && let Some(colour) = maps.colour(ix, iy)
             {
-                rgb = mix(rgb, colour_of(colour), 0.55);
+                let alpha = if colour == Colour::Red { 0.35 } else { 0.6 };
+                rgb = mix(rgb, colour_of(colour), alpha);
             }
             c.set(i64::from(px), i64::from(py), rgb);
         }
@@ -174,7 +197,8 @@ fn draw_robot(c: &mut Canvas, view: &View, scene: &Scene, ghost: Option<(usize, 
 fn legend(c: &mut Canvas, scene: &Scene, maps: &LegMaps) {
     let y = i64::from(c.height()) - 34;
     let k = maps.counts;
-    c.text(
+    label(
+        c,
         8,
         y,
         &format!(
@@ -186,18 +210,15 @@ fn legend(c: &mut Canvas, scene: &Scene, maps: &LegMaps) {
             k.orange,
             k.blue
         ),
-        2,
-        [230, 230, 230],
     );
-    c.text(
+    label(
+        c,
         8,
         y + 18,
         &format!(
             "margin: support {:.2} m (white), conservative {:.2} m (yellow)",
             maps.now.support_margin_m, maps.now.conservative_margin_m
         ),
-        2,
-        [230, 230, 230],
     );
 }
 
@@ -217,7 +238,11 @@ pub fn draw_plan(scene: &Scene, maps: &LegMaps, plan: &FootfallPlan, ppm: f64) -
     for w in path.windows(2) {
         top.line(w[0], w[1], 2, GHOST);
     }
-    top.marker(view.px(Point2::new(plan.target[0], plan.target[1])), 7, TARGET);
+    top.marker(
+        view.px(Point2::new(plan.target[0], plan.target[1])),
+        7,
+        TARGET,
+    );
     legend(&mut top, scene, maps);
     // The profile along the wheel's path.
     let prof_h = 220u32;
@@ -246,7 +271,12 @@ pub fn draw_plan(scene: &Scene, maps: &LegMaps, plan: &FootfallPlan, ppm: f64) -
         + 0.05;
     let sx = (f64::from(c.width()) - 20.0) / total;
     let sz = (f64::from(prof_h) - 40.0) / (zhi - zlo).max(1e-6);
-    let pt = |s: f64, z: f64| (10.0 + s * sx, y0 + f64::from(prof_h) - 10.0 - (z - zlo) * sz);
+    let pt = |s: f64, z: f64| {
+        (
+            10.0 + s * sx,
+            y0 + f64::from(prof_h) - 10.0 - (z - zlo) * sz,
+        )
+    };
     for k in 1..plan.foot_path.len() {
         let (a, b) = (along[k - 1], along[k]);
         c.line(pt(a, ground[k - 1]), pt(b, ground[k]), 2, [170, 130, 90]);
@@ -261,19 +291,18 @@ pub fn draw_plan(scene: &Scene, maps: &LegMaps, plan: &FootfallPlan, ppm: f64) -
         let (p, q) = (&plan.foot_path[k - 1], &plan.foot_path[k]);
         c.line(pt(a, p[2] - r), pt(b, q[2] - r), 2, GHOST);
     }
-    c.text(
+    label(
+        &mut c,
         8,
         y0 as i64 + 6,
         &format!(
-            "{} plan: {} way-points in the swing, lift {:.0} cm, ground raised {:.0} cm; \
+            "{} plan: {} way-points in the swing, lift {:.0} cm, ground raised {:.0} cm. \
              profile: ground, raised ground, wheel bottom",
             plan.planner,
             plan.swing_waypoints,
             plan.lift_m * 100.0,
             raise * 100.0
         ),
-        2,
-        [230, 230, 230],
     );
     c
 }
