@@ -182,6 +182,7 @@ fn options_of(args: &WalkArgs) -> anyhow::Result<LeggedWalkOptions> {
             .as_deref()
             .map(super::foxglove::live_attachment)
             .transpose()?,
+        sag: None,
     })
 }
 
@@ -210,6 +211,8 @@ pub(crate) struct ModuleWalk<'a> {
     pub(crate) faults: &'a [String],
     pub(crate) planner: &'a str,
     pub(crate) gait: Option<&'a str>,
+    /// The simulated Controller's robot sags under load (the shipped athlete's compliance).
+    pub(crate) sag: bool,
 }
 
 /// The walk a legged module (`tca module legged-NAME`) serves: the robot, the terrain (a
@@ -226,6 +229,7 @@ pub(crate) fn module_options(m: &ModuleWalk<'_>) -> anyhow::Result<LeggedWalkOpt
         faults,
         planner,
         gait,
+        sag,
     } = *m;
     let terrain = match (course, terrain) {
         (_, Some(path)) => Some(LeggedTerrain::File(path.to_path_buf())),
@@ -250,6 +254,7 @@ pub(crate) fn module_options(m: &ModuleWalk<'_>) -> anyhow::Result<LeggedWalkOpt
         faults: parse_faults(faults)?,
         planner: LeggedPlanner::parse(planner, gait)
             .map_err(|e| anyhow::anyhow!("--planner: {e}"))?,
+        sag: sag.then(tca_legged_sim::SagParams::athlete),
         ..LeggedWalkOptions::new(robot)
     })
 }

@@ -5,6 +5,7 @@ mod bus;
 mod central;
 mod chaos;
 mod course;
+mod footfall;
 mod foxglove;
 mod legged_walk;
 mod log;
@@ -89,6 +90,10 @@ enum Command {
     /// each way with a delay, all logged; a recorded session played back.
     #[command(subcommand)]
     Bridge(bridge::BridgeCommand),
+    /// FootFall for an ATHLETE-like rover: one leg's reachability and stability maps, a
+    /// step planned (A* or SBL) and previewed, sent to the robot; the acceptance campaign.
+    #[command(subcommand)]
+    Footfall(footfall::FootfallCommand),
 }
 
 /// Where to find central (shared by the commands that connect).
@@ -211,6 +216,7 @@ pub(crate) fn main() -> ExitCode {
             Command::Plan(cmd) => plan::run(cmd).await,
             Command::Navigate(args) => navigate::run_navigate(args).await,
             Command::Bridge(cmd) => bridge::run(cmd).await,
+            Command::Footfall(cmd) => footfall::run(cmd).await,
         }
     });
     let result = match runtime.block_on(command) {

@@ -28,6 +28,8 @@ pub(crate) const BUILTIN_MODULES: &[&str] = &[
     "nav-ism",
     "nav-ltm",
     "nav-navigator",
+    "footfall-planner",
+    "footfall-exec",
 ];
 
 #[derive(Debug, Args)]
@@ -38,7 +40,9 @@ pub(crate) struct ModuleArgs {
     /// (with --record FILE.jsonl to keep it); cgspace-worker (with --index, --robot and --terrain or
     /// --course), one worker of the distributed CG-space route planner; the navigation
     /// modules nav-controller, nav-ism, nav-ltm or nav-navigator (with --course ramps|hill
-    /// or --terrain FILE.asc, and --start, --drift, --seed, --matcher as `tca navigate`).
+    /// or --terrain FILE.asc, and --start, --drift, --seed, --matcher as `tca navigate`);
+    /// FootFall's footfall-planner (ground side, with the terrain: --course, default
+    /// rock-field, or --terrain FILE.asc) and footfall-exec (robot side).
     name: String,
     #[command(flatten)]
     connect: ConnectArgs,
@@ -59,6 +63,10 @@ pub(crate) struct ModuleArgs {
     /// legged-gait plans on the true terrain instead of the LTM Manager's maps.
     #[arg(long)]
     ground_truth: bool,
+    /// legged-controller: the simulated robot sags under load when a leg lifts (the
+    /// compliance of the shipped athlete: 12 kN/m per leg, 2e-5 rad per N m at the joints).
+    #[arg(long)]
+    sag: bool,
     /// legged-controller injects a hardware fault: from simulated time SECONDS on, leg
     /// LEG's drives stop responding (repeat for several legs).
     #[arg(long, value_name = "LEG@SECONDS")]
@@ -143,6 +151,9 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
     }
     if let Some(inner) = args.name.strip_prefix("nav-") {
         return run_nav_module(&args, inner, &connector, &endpoint).await;
+    }
+    if args.name.starts_with("footfall-") {
+        return run_footfall_module(&args, &connector, &endpoint).await;
     }
     if args.index.is_some() || args.region_cap.is_some() {
         anyhow::bail!(
@@ -236,6 +247,7 @@ fn legged_options(
         faults: &args.fault,
         planner: &args.planner,
         gait: args.gait.as_deref(),
+        sag: args.sag,
     })
 }
 
@@ -337,6 +349,43 @@ async fn run_nav_module(
     let module = tca_nav_bus::connect_module(inner, connector, &setup)
         .await
         .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
+    serve(module, &args.name, endpoint).await
+}
+
+/// `tca module footfall-planner|footfall-exec`: the FootFall planner (ground side, with the
+/// terrain: `--course`, default rock-field, or `--terrain FILE.asc`) or the executor (robot
+/// side, beside the Controller).
+async fn run_footfall_module(
+    args: &ModuleArgs,
+    connector: &Connector,
+    endpoint: &str,
+) -> anyhow::Result<ExitCode> {
+    let module = match args.name.as_str() {
+        "footfall-exec" => tca_footfall_bus::connect_executor(connector, "footfall-exec").await,
+        "footfall-planner" => {
+            let terrain = match (&args.terrain, &args.course) {
+                (Some(path), _) => tca_footfall_bus::TerrainSource::File(path.clone()),
+                (None, course) => tca_footfall_bus::TerrainSource::parse(
+                    course.as_deref().unwrap_or("rock-field"),
+                    args.seed,
+                ),
+            };
+            let (field, _) = terrain.load()?;
+            tca_footfall_bus::connect_planner(
+                connector,
+                tca_footfall_bus::PlannerConfig {
+                    terrain: std::sync::Arc::new(field),
+                    options: tca_footfall::plan::PlanOptions::default(),
+                    module_name: "footfall-planner".into(),
+                },
+            )
+            .await
+        }
+        other => anyhow::bail!(
+            "no built-in module named {other:?}; the FootFall modules are footfall-planner and footfall-exec"
+        ),
+    }
+    .with_context(|| format!("module {} cannot join central at {endpoint}", args.name))?;
     serve(module, &args.name, endpoint).await
 }
 

@@ -7,7 +7,8 @@
 //! cells, start (0.3, 0) facing +X, goal (3.2, 0)): `hexapod-rough` and `hexapod-flat`; and `hexapod-walls` (5 x 3 m, start (0.5, 0), goal
 //! (4.5, 0)), the mixed terrain with walls of Belter and Skrzypczyński's planning experiments;
 //! and two for CG-space planning at the Ambler's scale (30 x 26 m): `cliff` (a plateau too
-//! tall to step, a ramp to one side) and `walled-goal` (a goal no route reaches).
+//! tall to step, a ramp to one side) and `walled-goal` (a goal no route reaches); and
+//! `rock-field` (14 x 14 m, 5 cm cells) for the ATHLETE-like rover's single steps.
 //! `COURSES.md` next to this crate describes each one.
 //!
 //! Every course is a pure function of its name and seed: the same pair always gives the
@@ -30,6 +31,7 @@ mod cliff;
 mod error;
 mod hexapod;
 mod relief;
+pub mod rocks;
 pub mod walls;
 
 #[cfg(test)]
@@ -56,6 +58,7 @@ pub const NAMES: &[&str] = &[
     "hexapod-walls",
     "cliff",
     "walled-goal",
+    "rock-field",
 ];
 
 /// Where and which way a robot starts on a course (world frame).
@@ -80,7 +83,8 @@ pub struct LeggedCourse {
     pub start: CourseStart,
     /// Where the robot should walk to (world XY, metres).
     pub goal: Point2<f64>,
-    /// The shipped robot whose scale the course suits (`"ambler"` or `"hexapod"`).
+    /// The shipped robot whose scale the course suits (`"ambler"`, `"hexapod"` or
+    /// `"athlete"`).
     pub robot_hint: &'static str,
     /// The seed the course was built from.
     pub seed: u64,
@@ -110,11 +114,14 @@ pub enum Course {
     Cliff,
     /// The goal in a yard walled in by a 5 m cliff (Ambler, 30 x 26 m): unreachable.
     WalledGoal,
+    /// Rocks of 8-45 cm among the wheels of the ATHLETE-like rover, level under its
+    /// starting wheels (14 x 14 m, 5 cm cells).
+    RockField,
 }
 
 impl Course {
     /// Every built-in course, in the order of [`NAMES`].
-    pub const ALL: [Course; 10] = [
+    pub const ALL: [Course; 11] = [
         Course::Boulders,
         Course::Ditch,
         Course::Slope,
@@ -125,6 +132,7 @@ impl Course {
         Course::HexapodWalls,
         Course::Cliff,
         Course::WalledGoal,
+        Course::RockField,
     ];
 
     /// The course called `name` (one of [`NAMES`]).
@@ -163,6 +171,7 @@ impl Course {
             Course::HexapodWalls => walls::walls(seed)?,
             Course::Cliff => cliff::cliff(seed)?,
             Course::WalledGoal => cliff::walled(seed)?,
+            Course::RockField => rocks::rock_field(seed)?,
         };
         let (start, goal, robot_hint) = match self {
             Course::HexapodRough | Course::HexapodFlat => {
@@ -171,6 +180,7 @@ impl Course {
             Course::HexapodWalls => (walls::START, walls::GOAL, "hexapod"),
             Course::Cliff => (cliff::CLIFF_START, cliff::CLIFF_GOAL, "ambler"),
             Course::WalledGoal => (cliff::WALLED_START, cliff::YARD_CENTRE, "ambler"),
+            Course::RockField => (rocks::START, rocks::GOAL, "athlete"),
             _ => (ambler::START, ambler::GOAL, "ambler"),
         };
         Ok(LeggedCourse {

@@ -35,7 +35,14 @@ fn same_seed_same_course_other_seed_other_course() {
         let b = Course::builtin(name, 11).unwrap();
         assert_eq!(heights(&a), heights(&b), "{name}");
     }
-    for name in ["boulders", "rough", "hexapod-rough", "cliff", "walled-goal"] {
+    for name in [
+        "boulders",
+        "rough",
+        "hexapod-rough",
+        "cliff",
+        "walled-goal",
+        "rock-field",
+    ] {
         let a = Course::builtin(name, 1).unwrap();
         let b = Course::builtin(name, 2).unwrap();
         assert_ne!(heights(&a), heights(&b), "{name}");
@@ -93,6 +100,9 @@ fn every_start_patch_is_level() {
     for seed in [0, 1, 99] {
         for name in NAMES {
             let c = Course::builtin(name, seed).unwrap();
+            if c.robot_hint == "athlete" {
+                continue; // level under its wheels instead: see the rock field's test
+            }
             let radius = if c.robot_hint == "ambler" { 3.0 } else { 0.3 };
             let patch = start_patch(&c, radius);
             assert!(patch.len() > 100, "{name}");
@@ -261,4 +271,43 @@ fn cliff_has_its_plateau_ramp_and_relief() {
     let w = Course::builtin("walled-goal", 1).unwrap();
     assert!(w.terrain.height_at(25.5, 0.0) > 4.9);
     assert!(w.terrain.height_at(20.0, 0.0).abs() <= 0.05 + 1e-9);
+}
+
+#[test]
+fn rock_field_is_level_under_the_starting_wheels_and_rocky_around_them() {
+    for seed in [0, 1, 7] {
+        let c = Course::builtin("rock-field", seed).unwrap();
+        assert_eq!(c.robot_hint, "athlete");
+        let (lo, hi) = c.terrain.extent();
+        assert!((hi.x - lo.x - 14.0).abs() < 1e-9 && (hi.y - lo.y - 14.0).abs() < 1e-9);
+        assert!((c.terrain.grid().resolution_m() - 0.05).abs() < 1e-12);
+        let top = c.terrain.max_height_m();
+        assert!(
+            (rocks::ROCK_MAX_M - rocks::RELIEF_PEAK_M
+                ..=rocks::ROCK_MAX_M + rocks::RELIEF_PEAK_M + 1e-9)
+                .contains(&top),
+            "seed {seed}: tallest {top}"
+        );
+        assert!(c.terrain.min_height_m() >= -rocks::RELIEF_PEAK_M - 1e-9);
+        let g = c.terrain.grid();
+        for w in rocks::wheel_spots() {
+            let patch: Vec<f64> = g
+                .iter()
+                .filter(|(cell, _)| (g.cell_center(*cell) - w).norm() <= rocks::WHEEL_PATCH_M)
+                .map(|(_, h)| *h)
+                .collect();
+            assert!(patch.len() > 400, "seed {seed}");
+            assert!(
+                patch.iter().all(|h| h.abs() < 1e-12),
+                "seed {seed}: wheel at {w}"
+            );
+        }
+        // Rocks among the wheels: within 4 m of the body centre, at least 15 of them.
+        let s = Point2::new(c.start.x_m, c.start.y_m);
+        let near = rocks::rock_list(seed)
+            .iter()
+            .filter(|r| (r.center - s).norm() < 4.0)
+            .count();
+        assert!(near >= 15, "seed {seed}: {near} rocks near the rover");
+    }
 }

@@ -91,6 +91,32 @@ impl RobotModel {
         Ok(shapes)
     }
 
+    /// The collision shapes of one leg's links placed in the body frame for that leg's
+    /// joint positions `q` (the other legs and the body do not move with them): what a
+    /// planner moving one leg tests at every sample, without placing the whole robot.
+    pub fn leg_collision_shapes(
+        &self,
+        leg: usize,
+        q: &[f64],
+    ) -> Result<Vec<PlacedShape<'_>>, KinematicsError> {
+        let l = self.leg_at(leg)?;
+        l.check(q)?;
+        let stages = l.stage_frames(q);
+        let mut shapes = Vec::new();
+        for link in &self.links {
+            if link.placement.leg != Some(leg) || link.collisions.is_empty() {
+                continue;
+            }
+            let pose = stages[link.placement.stage] * link.placement.offset;
+            shapes.extend(link.collisions.iter().map(|c| PlacedShape {
+                link: link.name(),
+                shape: c.shape,
+                pose: pose * c.origin,
+            }));
+        }
+        Ok(shapes)
+    }
+
     /// The centre of every foot's contact sphere in the body frame, one per leg.
     pub fn foot_positions<Q: AsRef<[f64]>>(
         &self,

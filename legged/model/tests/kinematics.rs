@@ -219,3 +219,25 @@ fn the_neutral_posture_clamps_zero_into_the_limits() {
     // point at 0.1 m below the body.
     assert!((robot.neutral_height() - 0.125).abs() < 1e-12);
 }
+
+#[test]
+fn one_legs_shapes_are_its_share_of_the_whole_robots() {
+    let robot = RobotModel::builtin("athlete").expect("loads");
+    let mut posture = robot.neutral_posture();
+    posture[2] = vec![0.3, 0.5, -0.4, 0.2, 0.1, 1.0];
+    let all = robot.collision_shapes(&posture).expect("placed");
+    for (leg, q) in posture.iter().enumerate() {
+        let mine = robot.leg_collision_shapes(leg, q).expect("placed");
+        let share: Vec<_> = all
+            .iter()
+            .filter(|s| robot.link(s.link).and_then(|l| l.leg()) == Some(leg))
+            .collect();
+        assert_eq!(mine.len(), share.len());
+        for (a, b) in mine.iter().zip(share) {
+            assert_eq!(a.link, b.link);
+            assert!((a.pose.translation.vector - b.pose.translation.vector).norm() < 1e-12);
+        }
+    }
+    assert!(robot.leg_collision_shapes(9, &posture[0]).is_err());
+    assert!(robot.leg_collision_shapes(0, &[0.0]).is_err());
+}

@@ -285,12 +285,12 @@ fn contains(shape: &Shape, p: &Point3<f64>) -> bool {
 /// centre's height above the highest centre it could rest at there when lowered
 /// vertically (negative: in the ground). Sampled at the centre, on three rings, and at the
 /// terrain samples under the sphere.
-pub(crate) fn foot_clearance(terrain: &HeightField, c: &Point3<f64>, r: f64) -> f64 {
+pub fn foot_clearance(terrain: &HeightField, c: &Point3<f64>, r: f64) -> f64 {
     c.z - rest_height(terrain, Point2::new(c.x, c.y), r)
 }
 
 /// The height of a foot sphere's centre resting on the terrain above `xy`.
-pub(crate) fn rest_height(terrain: &HeightField, xy: Point2<f64>, r: f64) -> f64 {
+pub fn rest_height(terrain: &HeightField, xy: Point2<f64>, r: f64) -> f64 {
     resting(terrain, xy, r).0
 }
 
@@ -300,7 +300,7 @@ pub(crate) fn rest_height(terrain: &HeightField, xy: Point2<f64>, r: f64) -> f64
 /// as high (on a slope, whose true contact lies between samples), their average weighted
 /// by how nearly each holds it up, so that the point moves smoothly with the foot rather
 /// than jumping from one sample to the next.
-pub(crate) fn touch_point(terrain: &HeightField, xy: Point2<f64>, r: f64) -> Point3<f64> {
+pub fn touch_point(terrain: &HeightField, xy: Point2<f64>, r: f64) -> Point3<f64> {
     let mut candidates = Vec::new();
     each_resting_candidate(terrain, xy, r, |centre, point| {
         candidates.push((centre, point))

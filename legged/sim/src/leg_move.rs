@@ -230,6 +230,7 @@ impl LeggedSim {
         let tol = self.params.contact_tolerance_m;
         let mut report = self.begin_move(min_margin);
         if self.stance[i] {
+            self.sag = self.begin_sag(i);
             self.stance[i] = false;
             self.push_event(&mut report, i, false);
         }
@@ -252,9 +253,21 @@ impl LeggedSim {
             for n in 1..=seg.samples {
                 let f = n as f64 / seg.samples as f64;
                 let q = seg.at(f);
-                posture[i] = q.clone();
+                // Where the leg really is: the body and the limb sagging under load.
+                let real = self.sagged(i, &q, true);
+                self.take_sag(&real);
+                let (body, q_real) = (real.body, real.q.clone());
+                posture[i] = q_real.clone();
                 report.samples += 1;
-                let hits = self.link_contacts(&self.body, &posture, Some(i));
+                if real.drag_m > crate::sag::DRAG_TOLERANCE_M && !in_transition {
+                    // A foot still bearing load, moved sideways: dragged across the ground.
+                    let at = body
+                        * l.foot_position(&q_real)
+                            .unwrap_or_else(|_| nalgebra::Point3::origin());
+                    let hits = vec![(l.foot_link().to_owned(), at)];
+                    return Err(self.stop_on_collision(report, i, reached, hits));
+                }
+                let hits = self.link_contacts(&body, &posture, Some(i));
                 if !hits.is_empty() {
                     return Err(self.stop_on_collision(report, i, reached, hits));
                 }
@@ -265,13 +278,23 @@ impl LeggedSim {
                     self.counters.self_collisions += 1;
                     self_contact = Some(contact);
                 }
-                let clearance = self.clearance(&self.body, i, &q);
+                let clearance = self.clearance(&body, i, &q_real);
                 if in_transition && clearance <= 0.0 {
                     // Touch-down between the previous sample and this one.
                     let f = self.contact_fraction(i, seg, prev_f, f);
-                    self.posture[i] = seg.at(f);
+                    let real = self.sagged(i, &seg.at(f), false);
+                    let (body, q_real) = (real.body, real.q);
+                    let centre = body
+                        * l.foot_position(&q_real)
+                            .unwrap_or_else(|_| nalgebra::Point3::origin());
+                    // The load returns and the body rises back over the standing feet:
+                    // the leg reaches down to where its foot touched.
+                    self.posture[i] = if self.sag.take().is_some() {
+                        self.reach_to(i, &centre, &seg.at(f))
+                    } else {
+                        seg.at(f)
+                    };
                     self.stance[i] = true;
-                    let centre = self.foot_centres()[i];
                     self.anchors[i] = centre;
                     self.advance(&mut report, seg.t0 + f * seg.duration);
                     self.push_event(&mut report, i, true);
@@ -280,8 +303,8 @@ impl LeggedSim {
                     return Ok(report);
                 }
                 if !in_transition && clearance < -tol {
-                    let at = self.body
-                        * l.foot_position(&q)
+                    let at = body
+                        * l.foot_position(&q_real)
                             .unwrap_or_else(|_| nalgebra::Point3::origin());
                     let hits = vec![(l.foot_link().to_owned(), at)];
                     return Err(self.stop_on_collision(report, i, reached, hits));
@@ -319,14 +342,18 @@ impl LeggedSim {
     /// The fraction of `seg` in `[lo, hi]` where the foot touches: clear at `lo` (or
     /// touching already), touching at `hi`.
     fn contact_fraction(&self, i: usize, seg: &Segment, lo: f64, hi: f64) -> f64 {
-        if self.clearance(&self.body, i, &seg.at(lo)) <= 0.0 {
+        let clear = |f: f64| {
+            let s = self.sagged(i, &seg.at(f), false);
+            self.clearance(&s.body, i, &s.q)
+        };
+        if clear(lo) <= 0.0 {
             return lo;
         }
         let (mut lo, mut hi) = (lo, hi);
         // 2^-24 of a sample step: far below the contact tolerance.
         for _ in 0..24 {
             let mid = 0.5 * (lo + hi);
-            if self.clearance(&self.body, i, &seg.at(mid)) <= 0.0 {
+            if clear(mid) <= 0.0 {
                 hi = mid;
             } else {
                 lo = mid;

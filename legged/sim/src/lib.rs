@@ -33,20 +33,25 @@
 //! - [`params`] has [`StartPose`], [`SimParams`].
 //! - [`report`] has [`MoveReport`], [`FootEvent`], [`Counters`].
 //! - [`error`] has [`SimError`], [`MoveError`] and the bus exception it raises.
+//! - [`sag`] has [`SagParams`]: the robot sagging under load when a leg lifts (an option).
 //! - [`pose`] has conversions to and from the bus's poses and points.
-//! - `collide.rs`: shapes and foot spheres against the height field.
+//! - [`collide`]: shapes and foot spheres against the height field; [`collide::rest_height`],
+//!   [`collide::touch_point`] and [`collide::foot_clearance`] of a foot sphere are public
+//!   for planners that place feet as the simulator does.
 
 mod body_move;
-mod collide;
+pub mod collide;
 pub mod error;
 mod leg_move;
 pub mod params;
 pub mod pose;
 pub mod report;
+pub mod sag;
 pub mod sim;
 
 pub use error::{MoveCommand, MoveError, MoveException, SimError};
 pub use params::{SimParams, StartPose};
 pub use pose::{isometry_to_pose, pose_to_isometry, world_point};
 pub use report::{Counters, FootEvent, MoveReport};
+pub use sag::SagParams;
 pub use sim::LeggedSim;

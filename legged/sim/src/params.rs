@@ -37,6 +37,9 @@ pub struct SimParams {
     /// default). When false the simulator carries such a move out and the robot tips over:
     /// for testing what a walker does after a fall.
     pub refuse_unstable_moves: bool,
+    /// The robot sags under load when a leg lifts (`None`, the default: a rigid robot).
+    #[serde(default)]
+    pub sag: Option<crate::sag::SagParams>,
 }
 
 impl SimParams {
@@ -52,6 +55,7 @@ impl SimParams {
             standing_height_m: h,
             max_start_slope_rad: 35f64.to_radians(),
             refuse_unstable_moves: true,
+            sag: None,
         }
     }
 
@@ -78,6 +82,9 @@ impl SimParams {
                     "{name} is {v}; give a finite number (>= 0 for a tolerance)"
                 ));
             }
+        }
+        if let Some(sag) = &self.sag {
+            sag.check()?;
         }
         Ok(())
     }

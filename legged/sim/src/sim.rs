@@ -36,6 +36,8 @@ pub struct LeggedSim {
     pub(crate) last: Option<MoveReport>,
     /// The leg each collision shape rides on, in `collision_shapes` order.
     pub(crate) shape_legs: Vec<Option<usize>>,
+    /// The sag of the lifted leg, when the robot sags ([`SimParams::sag`]).
+    pub(crate) sag: Option<crate::sag::Sag>,
 }
 
 impl std::fmt::Debug for LeggedSim {
@@ -157,6 +159,7 @@ impl LeggedSim {
             fallen: false,
             last: None,
             shape_legs,
+            sag: None,
         };
         sim.anchors = sim.foot_centres();
         if let Some((link, at)) = sim.link_contact(&sim.body, &sim.posture, None) {
@@ -222,6 +225,24 @@ impl LeggedSim {
         (0..self.model.legs().len())
             .filter_map(|i| self.contact_point(i))
             .collect()
+    }
+
+    /// Where a foot's centre really is, world frame: for a lifted leg of a sagging robot,
+    /// lower than its joints say by the sag taken so far ([`SimParams::sag`]); otherwise as
+    /// [`Self::foot_centres`].
+    pub fn real_foot_centre(&self, leg: usize) -> Option<Point3<f64>> {
+        let l = self.model.legs().get(leg)?;
+        let s = self.sagged(leg, &self.posture[leg], false);
+        Some(s.body * l.foot_position(&s.q).ok()?)
+    }
+
+    /// How far the lifted leg's foot sits below where its joints put it, metres (0 when the
+    /// robot does not sag or no leg is lifted).
+    pub fn sag_drop_m(&self, leg: usize) -> f64 {
+        match (self.real_foot_centre(leg), self.foot_centres().get(leg)) {
+            (Some(real), Some(commanded)) => commanded.z - real.z,
+            _ => 0.0,
+        }
     }
 
     /// The centre of mass, legs included, world frame.
@@ -405,6 +426,130 @@ impl LeggedSim {
         self.link_contacts(body, posture, leg).into_iter().next()
     }
 
+    /// The sag a leg lifting now starts, when the robot sags: the body's displacement as
+    /// its load moves onto the other standing feet, and the limb's droop.
+    pub(crate) fn begin_sag(&self, i: usize) -> Option<crate::sag::Sag> {
+        let params = self.params.sag?;
+        let inverse = self.body.inverse();
+        let feet: Vec<Point3<f64>> = self.anchors.iter().map(|a| inverse * a).collect();
+        let com = self.model.centre_of_mass(&self.posture).ok()?.centre;
+        let weight = self.model.total_mass() * crate::sag::GRAVITY;
+        let mut after = self.stance.clone();
+        after[i] = false;
+        let body = crate::sag::body_sag(
+            &feet,
+            &self.stance,
+            &after,
+            &com,
+            weight,
+            params.leg_stiffness_n_per_m,
+        );
+        let l = &self.model.legs()[i];
+        let nominal = self.body * l.foot_position(&self.posture[i]).ok()?;
+        Some(crate::sag::Sag {
+            leg: i,
+            body,
+            from: nominal,
+            taken: 0.0,
+            lifted: false,
+        })
+    }
+
+    /// How the lifted leg's joints give under gravity at commanded joints `q`.
+    fn droop(&self, i: usize, q: &[f64]) -> Vec<f64> {
+        let Some(params) = self.params.sag else {
+            return vec![0.0; q.len()];
+        };
+        let gravity = self.body.rotation.inverse() * (-Vector3::z() * crate::sag::GRAVITY);
+        crate::sag::limb_droop(
+            &self.model,
+            &self.posture,
+            i,
+            q,
+            &gravity,
+            params.joint_compliance_rad_per_nm,
+        )
+    }
+
+    /// The body pose and the leg's joints as they really are when leg `i` is commanded to
+    /// `q`, and the sag taken (see [`crate::sag`]); as commanded when the robot does not
+    /// sag. With `update` the share of the load off a foot not yet lifted off follows `q`;
+    /// without, the share last kept ([`Self::take_sag`]) is used.
+    pub(crate) fn sagged(&self, i: usize, q: &[f64], update: bool) -> Sagged {
+        let Some(sag) = self.sag.as_ref().filter(|s| s.leg == i) else {
+            return Sagged {
+                body: self.body,
+                q: q.to_vec(),
+                taken: 0.0,
+                lifted: true,
+                drag_m: 0.0,
+            };
+        };
+        let l = &self.model.legs()[i];
+        let droop = self.droop(i, q);
+        let real = |t: f64| {
+            let body = self.body * crate::sag::partial(&sag.body, t);
+            let q: Vec<f64> = q.iter().zip(&droop).map(|(a, d)| a + t * d).collect();
+            body * l.foot_position(&q).unwrap_or_else(|_| Point3::origin())
+        };
+        let (mut taken, mut lifted) = (sag.taken, sag.lifted);
+        if update && !lifted {
+            // The share of the load off the foot: the robot sags until the foot would go
+            // below where it lifted off, so that it leaves the ground only once the
+            // commanded rise exceeds the full sag (found by bisection: the foot sinks as
+            // the sag grows).
+            if real(1.0).z >= sag.from.z {
+                (taken, lifted) = (1.0, true);
+            } else if real(0.0).z <= sag.from.z {
+                taken = 0.0;
+            } else {
+                let (mut lo, mut hi) = (0.0, 1.0);
+                for _ in 0..24 {
+                    let mid = 0.5 * (lo + hi);
+                    if real(mid).z >= sag.from.z {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                taken = lo;
+            }
+        }
+        // Dragged: the foot commanded away sideways while it still bears load (the sag's
+        // own sideways give is the structure bending over the pinned foot, not a drag).
+        let commanded = self.body * l.foot_position(q).unwrap_or_else(|_| Point3::origin());
+        let drag_m = if lifted {
+            0.0
+        } else {
+            (commanded.x - sag.from.x).hypot(commanded.y - sag.from.y)
+        };
+        Sagged {
+            body: self.body * crate::sag::partial(&sag.body, taken),
+            q: q.iter().zip(&droop).map(|(a, d)| a + taken * d).collect(),
+            taken,
+            lifted,
+            drag_m,
+        }
+    }
+
+    /// Keeps the share of the sag the lifted leg has taken.
+    pub(crate) fn take_sag(&mut self, s: &Sagged) {
+        if let Some(sag) = self.sag.as_mut() {
+            sag.taken = s.taken;
+            sag.lifted = s.lifted;
+        }
+    }
+
+    /// Joints of leg `i` that put its foot's centre at world `centre` with the body where it
+    /// is, from `q`; `q` when none do.
+    pub(crate) fn reach_to(&self, i: usize, centre: &Point3<f64>, q: &[f64]) -> Vec<f64> {
+        let l = &self.model.legs()[i];
+        let target = self.body.inverse() * centre;
+        l.inverse_kinematics(&target, &IkOptions::starting_at(q))
+            .map(|s| s.joints)
+            .unwrap_or_else(|_| q.to_vec())
+    }
+
     /// A foot's clearance over the ground for this body pose and leg joints.
     pub(crate) fn clearance(&self, body: &Isometry3<f64>, leg: usize, q: &[f64]) -> f64 {
         let l = &self.model.legs()[leg];
@@ -448,6 +593,20 @@ impl LeggedSim {
             standing: self.standing_legs(),
         }
     }
+}
+
+/// Where a leg really is (see [`LeggedSim::sagged`]).
+pub(crate) struct Sagged {
+    /// The body's pose.
+    pub(crate) body: Isometry3<f64>,
+    /// The leg's joints.
+    pub(crate) q: Vec<f64>,
+    /// The share of the sag taken.
+    pub(crate) taken: f64,
+    /// Whether the foot has left the ground.
+    pub(crate) lifted: bool,
+    /// How far a foot still bearing load is commanded sideways from where it stood, metres.
+    pub(crate) drag_m: f64,
 }
 
 /// Whether a margin falls short of a minimum (a NaN margin always does).

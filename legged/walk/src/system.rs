@@ -37,6 +37,8 @@ pub struct LeggedSetup {
     pub faults: Vec<InjectedFault>,
     /// What plans the steps.
     pub planner: LeggedPlanner,
+    /// The simulated Controller's robot sags under load (`None`: rigid).
+    pub sag: Option<tca_legged_sim::SagParams>,
 }
 
 /// What plans a legged walk's steps.
@@ -87,7 +89,7 @@ impl LeggedSetup {
     /// The simulated Controller's configuration for this setup (module `controller`, the
     /// simulator's defaults for the robot, the faults to inject).
     pub fn controller_config(&self) -> LeggedControllerConfig {
-        LeggedControllerConfig {
+        let mut config = LeggedControllerConfig {
             module_name: "controller".into(),
             faults: self.faults.clone(),
             ..LeggedControllerConfig::new(
@@ -96,7 +98,9 @@ impl LeggedSetup {
                 self.terrain.clone(),
                 self.start,
             )
-        }
+        };
+        config.params.sag = self.sag;
+        config
     }
 
     /// Half the side of the map the walking module asks for: the region the feet can reach

@@ -63,6 +63,8 @@ pub struct LeggedWalkOptions {
     /// Started once central is up, before the modules connect (in-process only): a live
     /// view, for example.
     pub attach: Option<tca_module::Attachment>,
+    /// The simulated robot sags under load when a leg lifts (`None`: rigid).
+    pub sag: Option<tca_legged_sim::SagParams>,
 }
 
 impl LeggedWalkOptions {
@@ -82,6 +84,7 @@ impl LeggedWalkOptions {
             faults: Vec::new(),
             planner: LeggedPlanner::FreeGait,
             attach: None,
+            sag: None,
         }
     }
 }
@@ -193,6 +196,7 @@ pub fn prepare(options: &LeggedWalkOptions) -> anyhow::Result<Prepared> {
         ground_truth: options.ground_truth,
         faults: options.faults.clone(),
         planner: options.planner,
+        sag: options.sag,
     };
     Ok(Prepared {
         setup,
