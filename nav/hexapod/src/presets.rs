@@ -15,9 +15,11 @@ pub const HEXAPOD_DANGER: &str = include_str!("../../danger-map/robots/hexapod.t
 /// front of the body looking 0.5 rad down, and speeds a walking robot keeps up with.
 ///
 /// The camera sits ahead of the body's origin by 55 % of the farthest neutral foot's
-/// reach forward and 40 % of the standing height above it. The body walks at most 6 cm/s
-/// and turns 0.4 rad/s for a robot whose feet stand 0.33 m from its centre (the shipped
-/// hexapod), lengths and speeds scaling with the robot.
+/// reach forward and 40 % of the standing height above it. The loop runs once a second,
+/// as the paper's did on the DLR Crawler, so that the terrain map's ageing (in frames)
+/// spans as much ground as it did there; the body walks at most 4 cm/s and turns
+/// 0.3 rad/s for a robot whose feet stand 0.33 m from its centre (the shipped hexapod),
+/// lengths and speeds scaling with the robot.
 pub fn legged_params(model: &RobotModel, danger: Option<DangerParams>) -> NavParams {
     let s = foot_spread_m(model).max(1e-3) / 0.33;
     let reach_forward = model
@@ -33,8 +35,13 @@ pub fn legged_params(model: &RobotModel, danger: Option<DangerParams>) -> NavPar
     };
     let danger =
         danger.unwrap_or_else(|| DangerParams::paper(2.0 * footprint_radius_m(model)));
-    let mut params = NavParams::new(danger, mount, 0.06 * s);
-    params.max_turn_rps = 0.4;
+    let mut params = NavParams::new(danger, mount, 0.04 * s);
+    params.max_turn_rps = 0.3;
+    params.frame_period_s = 1.0;
+    // A command holds for a whole second: a turn gain of 0.45/s closes 45 % of a heading
+    // error per frame (90 % in exploration turns, which turn at twice the gain), so that
+    // neither overshoots.
+    params.turn_gain = 0.45;
     params
 }
 

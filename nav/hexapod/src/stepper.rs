@@ -116,6 +116,8 @@ pub struct Walk {
     lead: (f64, f64),
     moves: usize,
     failures: usize,
+    /// Swings planned since the body last moved.
+    swings: usize,
     ended: Option<WalkEnd>,
 }
 
@@ -164,6 +166,19 @@ impl Walk {
         match stepper.next(state, self.target, self.lead) {
             Next::Move(plan) => {
                 self.moves += 1;
+                if plan.actions.iter().any(|a| matches!(a, Action::Body { .. })) {
+                    self.swings = 0;
+                } else {
+                    self.swings += 1;
+                }
+                // Every foot re-placed twice over without the body moving: it goes nowhere.
+                if self.swings > 2 * stepper.neutral.len() {
+                    self.ended = Some(WalkEnd::Stuck(format!(
+                        "{} feet re-placed without the body moving",
+                        self.swings - 1
+                    )));
+                    return None;
+                }
                 Some(plan.actions)
             }
             Next::Arrived => {
@@ -250,6 +265,7 @@ impl Stepper {
             lead,
             moves: 0,
             failures: 0,
+            swings: 0,
             ended: None,
         }
     }
@@ -267,7 +283,7 @@ impl Stepper {
         let here = planar(&state.body);
         // A foot in the air (a swing that found no ground, say): set it down first.
         if let Some(leg) = state.legs.iter().position(|l| !l.stance) {
-            let led = here.moved(lead.0, 0.0, lead.1);
+            let led = self.led(&here, lead);
             return match self.place(state, leg, &led, &here) {
                 Ok(plan) => Next::Move(plan),
                 Err(why) => Next::Stuck(why),
@@ -283,7 +299,7 @@ impl Stepper {
             .min(p.max_body_turn_rad / turn.abs().max(1e-12))
             .min(1.0);
         let next = here.moved(forward * k, left * k, turn * k);
-        let led = next.moved(lead.0, 0.0, lead.1);
+        let led = self.led(&next, lead);
         let mut why = Vec::new();
         // Feet that would stray too far from their places: re-placed first.
         let mut offsets: Vec<(usize, f64)> = (0..state.legs.len())
@@ -327,6 +343,22 @@ impl Stepper {
         }
         why.dedup();
         Next::Stuck(why.join("; "))
+    }
+
+    /// The pose the feet are set under: `at` moved on by the lead, shortened so that no
+    /// foot's place moves by more than half the offset at which feet are re-placed (a foot
+    /// just set down must not count as straying at once).
+    fn led(&self, at: &Pose2, lead: (f64, f64)) -> Pose2 {
+        let full = at.moved(lead.0, 0.0, lead.1);
+        let shift = (0..self.neutral.len())
+            .map(|i| (self.place_under(i, &full) - self.place_under(i, at)).norm())
+            .fold(0.0, f64::max);
+        let most = 0.5 * self.params.max_foot_offset_m;
+        if shift <= most {
+            return full;
+        }
+        let k = most / shift;
+        at.moved(lead.0 * k, 0.0, lead.1 * k)
     }
 
     /// How far (horizontally) a standing foot is from its neutral place under `at`, m.
