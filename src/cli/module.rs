@@ -265,8 +265,11 @@ async fn run_nav_module(
     // A terrain file needs a start; the goal is the navigator's goal's, not the modules'.
     let goal = args.start.as_ref().map(|_| "0,0");
     let course = super::navigate::nav_course(&terrain, args.start.as_deref(), goal)?;
-    let (base, params) =
-        super::navigate::nav_robot(args.robot.as_deref().unwrap_or("wheeled"), None, args.matcher)?;
+    let (base, params) = super::navigate::nav_robot(
+        args.robot.as_deref().unwrap_or("wheeled"),
+        None,
+        args.matcher,
+    )?;
     let setup = tca_nav_bus::NavSetup {
         terrain: std::sync::Arc::new(course.terrain.clone()),
         base,

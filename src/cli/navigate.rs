@@ -23,7 +23,11 @@ pub(crate) struct NavigateArgs {
     /// or a walking robot's URDF file (a shipped robot's name works too). A walking robot
     /// walks the navigator's speeds with the free gait on the legged simulator, its camera
     /// on its body.
-    #[arg(long, default_value = "wheeled", value_name = "wheeled|hexapod|FILE.urdf")]
+    #[arg(
+        long,
+        default_value = "wheeled",
+        value_name = "wheeled|hexapod|FILE.urdf"
+    )]
     robot: String,
     /// The terrain: an .asc file, or a built-in course (`ramps`, `hill`).
     #[arg(long)]

@@ -103,7 +103,10 @@ pub fn depth_of(f: &DepthFrame, width: usize, height: usize) -> Result<DepthImag
         });
     }
     let e = &f.estimate;
-    if !(e.x_m.is_finite() && e.y_m.is_finite() && e.yaw_rad.is_finite() && attitude_of(f).is_finite())
+    if !(e.x_m.is_finite()
+        && e.y_m.is_finite()
+        && e.yaw_rad.is_finite()
+        && attitude_of(f).is_finite())
         || f.depth_m.iter().any(|d| !(d.is_finite() && *d >= 0.0))
     {
         return Err(FrameError::NotFinite);

@@ -7,10 +7,10 @@
 
 use std::sync::{Arc, Mutex};
 
+use tca_legged_messages::BodyPose;
 use tca_module::{Connector, HandlerError, Module, ModuleError};
 use tca_nav_messages::{AcquireDepth, DepthFrame, TruePose};
 use tca_nav_navigator::Pose2;
-use tca_legged_messages::BodyPose;
 use tca_nav_sensing::{Attitude, CameraMount, CameraParams, DepthCamera, DriftingOdometry};
 use tca_robot::HeightField;
 
@@ -103,9 +103,10 @@ fn acquire(
         s.odometry.update(&last, &truth);
     }
     s.last_true = Some(truth);
-    let image = s
-        .camera
-        .capture(&config.terrain, &config.mount.camera_pose(&truth, &attitude));
+    let image = s.camera.capture(
+        &config.terrain,
+        &config.mount.camera_pose(&truth, &attitude),
+    );
     let (width, height, depth_m) = depth_msg(&image);
     let frame = s.frames;
     s.frames += 1;

@@ -35,8 +35,13 @@ async fn the_hexapod_walks_to_a_near_goal_on_the_bus_as_in_one_process() {
         seed: 3,
         max_frames: 60,
     };
-    let mut base = HexapodBase::new(model.clone(), terrain.clone(), course.start, stepper.clone())
-        .unwrap();
+    let mut base = HexapodBase::new(
+        model.clone(),
+        terrain.clone(),
+        course.start,
+        stepper.clone(),
+    )
+    .unwrap();
     let (direct, _) = run(&course.terrain, &mut base, params.clone(), &opts).unwrap();
     assert!(direct.reached, "{}", direct.reason);
     assert_eq!(direct.robot, "hexapod");

@@ -6,7 +6,9 @@ use std::sync::Arc;
 use tca_free_gait::{Action, GaitState, LegGaitState};
 use tca_legged_messages::{LegStateReply, Pose};
 use tca_legged_model::RobotModel;
-use tca_legged_sim::{LeggedSim, MoveError, SimParams, StartPose, isometry_to_pose, pose_to_isometry};
+use tca_legged_sim::{
+    LeggedSim, MoveError, SimParams, StartPose, isometry_to_pose, pose_to_isometry,
+};
 use tca_nav_navigator::{Base, Motion};
 use tca_nav_sensing::{Attitude, Pose2};
 use tca_robot::HeightField;

@@ -33,8 +33,7 @@ pub fn legged_params(model: &RobotModel, danger: Option<DangerParams>) -> NavPar
         height_m: 0.4 * model.neutral_height(),
         pitch_down_rad: 0.5,
     };
-    let danger =
-        danger.unwrap_or_else(|| DangerParams::paper(2.0 * footprint_radius_m(model)));
+    let danger = danger.unwrap_or_else(|| DangerParams::paper(2.0 * footprint_radius_m(model)));
     let mut params = NavParams::new(danger, mount, 0.04 * s);
     params.max_turn_rps = 0.3;
     params.frame_period_s = 1.0;

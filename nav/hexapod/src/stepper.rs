@@ -166,7 +166,11 @@ impl Walk {
         match stepper.next(state, self.target, self.lead) {
             Next::Move(plan) => {
                 self.moves += 1;
-                if plan.actions.iter().any(|a| matches!(a, Action::Body { .. })) {
+                if plan
+                    .actions
+                    .iter()
+                    .any(|a| matches!(a, Action::Body { .. }))
+                {
                     self.swings = 0;
                 } else {
                     self.swings += 1;
@@ -255,7 +259,8 @@ impl Stepper {
         duration_s: f64,
     ) -> Walk {
         let p = &self.params;
-        let target = planar(&state.body).moved(forward_mps * duration_s, 0.0, turn_rps * duration_s);
+        let target =
+            planar(&state.body).moved(forward_mps * duration_s, 0.0, turn_rps * duration_s);
         let lead = (
             (forward_mps * p.lead_s).clamp(-p.max_lead_m, p.max_lead_m),
             (turn_rps * p.lead_s).clamp(-p.max_lead_rad, p.max_lead_rad),
@@ -315,7 +320,10 @@ impl Stepper {
                 Err(e) => why.push(e),
             }
         }
-        match self.gait.move_body_to(state, &self.view, &self.body_pose(state, &next)) {
+        match self
+            .gait
+            .move_body_to(state, &self.view, &self.body_pose(state, &next))
+        {
             Ok(plan) => return Next::Move(plan),
             Err(e) => why.push(format!("the body move: {e}")),
         }

@@ -289,7 +289,8 @@ impl Navigator {
             replanned.dedup();
             for c in replanned {
                 let cell = Cell::new(c.ix, c.iy);
-                if self.planner.set_danger(cell, self.planned_danger(c))? && near_path.contains(&cell)
+                if self.planner.set_danger(cell, self.planned_danger(c))?
+                    && near_path.contains(&cell)
                 {
                     affected = true;
                 }

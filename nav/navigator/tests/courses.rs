@@ -7,13 +7,22 @@ use tca_nav_navigator::{hill_course, ramps_course, true_danger_map, wheeled_para
 
 /// D* Lite from the course's start to its goal on the true danger map with the cells
 /// `blocked` says made untraversable: the path's cells, or `None` when there is none.
-fn plan(course: &tca_nav_navigator::Course, blocked: impl Fn(Point2<f64>) -> bool) -> Option<Vec<Point2<f64>>> {
+fn plan(
+    course: &tca_nav_navigator::Course,
+    blocked: impl Fn(Point2<f64>) -> bool,
+) -> Option<Vec<Point2<f64>>> {
     let params = wheeled_params();
     let truth = true_danger_map(&course.terrain, &params).unwrap();
     let cells = truth.cells();
     let dangers = cells
         .iter()
-        .map(|(c, d)| if blocked(cells.cell_center(c)) { f64::INFINITY } else { d.danger })
+        .map(|(c, d)| {
+            if blocked(cells.cell_center(c)) {
+                f64::INFINITY
+            } else {
+                d.danger
+            }
+        })
         .collect();
     let grid = CostGrid::from_dangers(cells.nx(), cells.ny(), params.beta, dangers).unwrap();
     let start = Point2::new(course.start.x, course.start.y);
@@ -57,7 +66,13 @@ fn the_hill_cannot_be_climbed_and_can_be_walked_round() {
     let params = wheeled_params();
     let truth = true_danger_map(&course.terrain, &params).unwrap();
     let top = truth.cells().nearest_cell(Point2::new(1.25, 1.1));
-    assert!(!truth.cell(top).is_traversable(), "the hill's top is untraversable");
+    assert!(
+        !truth.cell(top).is_traversable(),
+        "the hill's top is untraversable"
+    );
     let path = plan(&course, |_| false).expect("a way round the hill");
-    assert!(path.iter().all(|p| (p - Point2::new(1.25, 1.1)).norm() > 0.3));
+    assert!(
+        path.iter()
+            .all(|p| (p - Point2::new(1.25, 1.1)).norm() > 0.3)
+    );
 }
