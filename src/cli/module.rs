@@ -25,6 +25,7 @@ pub(crate) const BUILTIN_MODULES: &[&str] = &[
     "legged-telemetry",
     "cgspace-worker",
     "nav-controller",
+    "nav-legged-controller",
     "nav-ism",
     "nav-ltm",
     "nav-navigator",
@@ -39,10 +40,11 @@ pub(crate) struct ModuleArgs {
     /// legged-gait (with --robot); legged-telemetry, the ground side's telemetry monitor
     /// (with --record FILE.jsonl to keep it); cgspace-worker (with --index, --robot and --terrain or
     /// --course), one worker of the distributed CG-space route planner; the navigation
-    /// modules nav-controller, nav-ism, nav-ltm or nav-navigator (with --course ramps|hill
-    /// or --terrain FILE.asc, and --start, --drift, --seed, --matcher as `tca navigate`);
-    /// FootFall's footfall-planner (ground side, with the terrain: --course, default
-    /// rock-field, or --terrain FILE.asc) and footfall-exec (robot side).
+    /// modules nav-controller, nav-ism, nav-ltm or nav-navigator, and for a walking base
+    /// nav-legged-controller (with --course ramps|hill or --terrain FILE.asc, and --robot,
+    /// --start, --drift, --seed, --matcher as `tca navigate`); FootFall's footfall-planner
+    /// (ground side, with the terrain: --course, default rock-field, or --terrain FILE.asc)
+    /// and footfall-exec (robot side).
     name: String,
     #[command(flatten)]
     connect: ConnectArgs,
@@ -338,10 +340,15 @@ async fn run_nav_module(
     // A terrain file needs a start; the goal is the navigator's goal's, not the modules'.
     let goal = args.start.as_ref().map(|_| "0,0");
     let course = super::navigate::nav_course(&terrain, args.start.as_deref(), goal)?;
+    let (base, params) = super::navigate::nav_robot(
+        args.robot.as_deref().unwrap_or("wheeled"),
+        None,
+        args.matcher,
+    )?;
     let setup = tca_nav_bus::NavSetup {
         terrain: std::sync::Arc::new(course.terrain.clone()),
-        wheeled: tca_nav_navigator::WheeledParams::PIONEER,
-        params: super::navigate::nav_params(None, args.matcher)?,
+        base,
+        params,
         start: course.start,
         drift: args.drift / 100.0,
         seed: args.seed,

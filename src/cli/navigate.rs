@@ -9,18 +9,25 @@ use std::process::ExitCode;
 use anyhow::{Context as _, bail};
 use clap::Args;
 use serde_json::json;
-use tca_nav_bus::{NavSetup, run_on_bus_with, run_with};
+use tca_nav_bus::{LeggedBase, NavBase, NavSetup, run_on_bus_with, run_with};
+use tca_nav_hexapod::{HexapodBase, StepperParams, hexapod_params, legged_params};
 use tca_nav_navigator::{
-    Course, DangerParams, Pose2, RunOptions, RunReport, WheeledBase, WheeledParams, course_by_name,
-    run, wheeled_params, write_picture,
+    Base, Course, DangerParams, NavParams, Pose2, RunOptions, RunReport, WheeledBase,
+    WheeledParams, course_by_name, run, wheeled_params, write_picture,
 };
 use tca_robot::terrain::asc::{NoData, read_height_field};
 
 #[derive(Debug, Args)]
 pub(crate) struct NavigateArgs {
-    /// The robot: `wheeled` (differential drive). `hexapod` and URDF files are not yet
-    /// driven by the navigator.
-    #[arg(long, default_value = "wheeled")]
+    /// The robot: `wheeled` (differential drive), `hexapod` (the shipped walking hexapod),
+    /// or a walking robot's URDF file (a shipped robot's name works too). A walking robot
+    /// walks the navigator's speeds with the free gait on the legged simulator, its camera
+    /// on its body.
+    #[arg(
+        long,
+        default_value = "wheeled",
+        value_name = "wheeled|hexapod|FILE.urdf"
+    )]
     robot: String,
     /// The terrain: an .asc file, or a built-in course (`ramps`, `hill`).
     #[arg(long)]
@@ -136,32 +143,47 @@ pub(crate) fn nav_course(
     Ok(course)
 }
 
-/// The wheeled base's navigation parameters, with another danger file and the LTM Matcher
-/// if asked.
-pub(crate) fn nav_params(
+/// The base `robot` names (`wheeled`, `hexapod`, another shipped walking robot or a URDF
+/// file) and its navigation parameters, with another danger file and the LTM Matcher if
+/// asked.
+pub(crate) fn nav_robot(
+    robot: &str,
     danger: Option<&std::path::Path>,
     matcher: bool,
-) -> anyhow::Result<tca_nav_navigator::NavParams> {
-    let mut params = wheeled_params();
-    if let Some(path) = danger {
-        params.danger = DangerParams::read(path)?;
-    }
+) -> anyhow::Result<(NavBase, NavParams)> {
+    let danger = danger.map(DangerParams::read).transpose()?;
+    let (base, mut params) = match robot {
+        "wheeled" => {
+            let mut params = wheeled_params();
+            if let Some(d) = danger {
+                params.danger = d;
+            }
+            (NavBase::Wheeled(WheeledParams::PIONEER), params)
+        }
+        name => {
+            let (model, urdf) = tca_legged_walk::walk::load_robot(name).with_context(|| {
+                format!("--robot {name}: give wheeled, hexapod or a walking robot's URDF file")
+            })?;
+            let params = match danger {
+                None if name == "hexapod" => hexapod_params(&model)?,
+                danger => legged_params(&model, danger),
+            };
+            let stepper = StepperParams::for_model(&model);
+            let base = LeggedBase {
+                model: std::sync::Arc::new(model),
+                urdf,
+                stepper,
+            };
+            (NavBase::Legged(base), params)
+        }
+    };
     if matcher {
         params.matcher = Some(tca_nav_navigator::MatchParams::default());
     }
-    Ok(params)
+    Ok((base, params))
 }
 
 pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode> {
-    match args.robot.as_str() {
-        "wheeled" => {}
-        "hexapod" => bail!(
-            "--robot hexapod: the navigator does not drive the walking hexapod yet; use --robot wheeled"
-        ),
-        other => bail!(
-            "--robot {other}: the navigator drives only the built-in wheeled base; use --robot wheeled"
-        ),
-    }
     if !(args.drift.is_finite() && args.drift >= 0.0) {
         bail!(
             "--drift {} is not valid; give a percentage of at least 0",
@@ -172,7 +194,7 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
         bail!("--seeds must be at least 1");
     }
     let course = course(&args)?;
-    let params = nav_params(args.danger.as_deref(), args.matcher)?;
+    let (base, params) = nav_robot(&args.robot, args.danger.as_deref(), args.matcher)?;
     let terrain = std::sync::Arc::new(course.terrain.clone());
     let attach = args
         .foxglove
@@ -190,13 +212,26 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
         };
         let several = args.seeds > 1;
         let (report, danger) = if args.direct {
-            let mut base = WheeledBase::new(WheeledParams::PIONEER, &course.terrain, course.start);
-            let (report, nav) = run(&course.terrain, &mut base, params.clone(), &opts)?;
+            let mut driven: Box<dyn Base + '_> = match &base {
+                NavBase::Wheeled(p) => {
+                    Box::new(WheeledBase::new(*p, &course.terrain, course.start))
+                }
+                NavBase::Legged(l) => Box::new(
+                    HexapodBase::new(
+                        l.model.clone(),
+                        terrain.clone(),
+                        course.start,
+                        l.stepper.clone(),
+                    )
+                    .map_err(|e| anyhow::anyhow!("--robot {}: {e}", args.robot))?,
+                ),
+            };
+            let (report, nav) = run(&course.terrain, driven.as_mut(), params.clone(), &opts)?;
             (report, nav.danger().clone())
         } else {
             let setup = NavSetup {
                 terrain: terrain.clone(),
-                wheeled: WheeledParams::PIONEER,
+                base: base.clone(),
                 params: params.clone(),
                 start: course.start,
                 drift: opts.drift,

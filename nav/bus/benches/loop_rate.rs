@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use tca_nav_bus::{NavSetup, run_on_bus};
+use tca_nav_bus::{NavBase, NavSetup, run_on_bus};
 use tca_nav_navigator::{
     Course, RunOptions, RunReport, WheeledBase, WheeledParams, hill_course, run, wheeled_params,
 };
@@ -44,7 +44,7 @@ fn bench(c: &mut Criterion) {
     let course = hill_course().expect("the hill course");
     let setup = NavSetup {
         terrain: Arc::new(course.terrain.clone()),
-        wheeled: WheeledParams::PIONEER,
+        base: NavBase::Wheeled(WheeledParams::PIONEER),
         params: wheeled_params(),
         start: course.start,
         drift: 0.0125,

@@ -82,18 +82,7 @@ fn drive(
     state: &Mutex<State>,
     d: &Drive,
 ) -> Result<Driven, HandlerError> {
-    if !(d.forward_mps.is_finite() && d.turn_rps.is_finite()) {
-        return Err(HandlerError::new(format!(
-            "nav.drive: the speeds must be finite numbers (got forward {} m/s, turn {} rad/s)",
-            d.forward_mps, d.turn_rps
-        )));
-    }
-    if !(d.duration_s.is_finite() && d.duration_s > 0.0 && d.duration_s <= config.max_duration_s) {
-        return Err(HandlerError::new(format!(
-            "nav.drive: duration_s {} is not valid; give more than 0 and at most {} s",
-            d.duration_s, config.max_duration_s
-        )));
-    }
+    check_drive(d, config.max_duration_s)?;
     let mut s = lock(state);
     let mut base = WheeledBase::new(config.wheeled, &config.terrain, s.pose);
     let m = base.drive(d.forward_mps, d.turn_rps, d.duration_s);
@@ -107,6 +96,23 @@ fn drive(
         collided: m.collided,
         fell: m.fell,
     })
+}
+
+/// Refuses speeds that are not numbers and durations outside (0, `max_duration_s`].
+pub(crate) fn check_drive(d: &Drive, max_duration_s: f64) -> Result<(), HandlerError> {
+    if !(d.forward_mps.is_finite() && d.turn_rps.is_finite()) {
+        return Err(HandlerError::new(format!(
+            "nav.drive: the speeds must be finite numbers (got forward {} m/s, turn {} rad/s)",
+            d.forward_mps, d.turn_rps
+        )));
+    }
+    if !(d.duration_s.is_finite() && d.duration_s > 0.0 && d.duration_s <= max_duration_s) {
+        return Err(HandlerError::new(format!(
+            "nav.drive: duration_s {} is not valid; give more than 0 and at most {} s",
+            d.duration_s, max_duration_s
+        )));
+    }
+    Ok(())
 }
 
 fn lock(s: &Mutex<State>) -> std::sync::MutexGuard<'_, State> {

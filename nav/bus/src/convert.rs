@@ -4,7 +4,7 @@ use nalgebra::Point2;
 use tca_nav_danger_map::CellDanger;
 use tca_nav_messages::{CellDangerMsg, DangerGrid, DepthFrame, PlanarPose};
 use tca_nav_navigator::{CellChange, Pose2};
-use tca_nav_sensing::DepthImage;
+use tca_nav_sensing::{Attitude, DepthImage};
 use tca_robot::{CellIndex, Grid};
 
 /// A pose as sent.
@@ -19,6 +19,27 @@ pub fn pose_msg(p: &Pose2) -> PlanarPose {
 /// A pose as received.
 pub fn pose_of(p: &PlanarPose) -> Pose2 {
     Pose2::new(p.x_m, p.y_m, p.yaw_rad)
+}
+
+/// A legged body's pose as its planar pose and its height and tilt.
+pub fn body_pose_of(p: &tca_legged_messages::Pose) -> (Pose2, Attitude) {
+    (
+        Pose2::new(p.x_m, p.y_m, p.yaw_rad),
+        Attitude {
+            z_m: p.z_m,
+            roll_rad: p.roll_rad,
+            pitch_rad: p.pitch_rad,
+        },
+    )
+}
+
+/// The measured height and tilt a depth frame was taken with.
+pub fn attitude_of(f: &DepthFrame) -> Attitude {
+    Attitude {
+        z_m: f.base_z_m,
+        roll_rad: f.base_roll_rad,
+        pitch_rad: f.base_pitch_rad,
+    }
 }
 
 /// A depth image as sent: each depth as a 32-bit float, 0 where there is none. The
@@ -82,7 +103,10 @@ pub fn depth_of(f: &DepthFrame, width: usize, height: usize) -> Result<DepthImag
         });
     }
     let e = &f.estimate;
-    if !(e.x_m.is_finite() && e.y_m.is_finite() && e.yaw_rad.is_finite() && f.ground_m.is_finite())
+    if !(e.x_m.is_finite()
+        && e.y_m.is_finite()
+        && e.yaw_rad.is_finite()
+        && attitude_of(f).is_finite())
         || f.depth_m.iter().any(|d| !(d.is_finite() && *d >= 0.0))
     {
         return Err(FrameError::NotFinite);

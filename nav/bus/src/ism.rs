@@ -1,17 +1,20 @@
 //! The ISM on the bus (`ism`): the simulated stereo camera and visual odometry. Each
 //! `nav.acquireDepth` asks the simulated Controller where the base really is (a simulated
-//! camera must be placed there), moves the drifting odometry by the motion since the last
-//! frame, and answers with the depth image and the odometry's estimate.
+//! camera must be placed there: `nav.truePose` of a wheeled base, over the terrain under
+//! it; `legged.bodyPose` of a legged robot, whose body carries the camera), moves the
+//! drifting odometry by the planar motion since the last frame, and answers with the depth
+//! image, the odometry's estimate and the base's height and tilt.
 
 use std::sync::{Arc, Mutex};
 
+use tca_legged_messages::BodyPose;
 use tca_module::{Connector, HandlerError, Module, ModuleError};
 use tca_nav_messages::{AcquireDepth, DepthFrame, TruePose};
 use tca_nav_navigator::Pose2;
-use tca_nav_sensing::{CameraMount, CameraParams, DepthCamera, DriftingOdometry};
+use tca_nav_sensing::{Attitude, CameraMount, CameraParams, DepthCamera, DriftingOdometry};
 use tca_robot::HeightField;
 
-use crate::convert::{depth_msg, pose_msg, pose_of};
+use crate::convert::{body_pose_of, depth_msg, pose_msg, pose_of};
 
 /// How the ISM runs.
 #[derive(Debug, Clone)]
@@ -30,6 +33,19 @@ pub struct IsmConfig {
     pub drift: f64,
     /// Seed of the camera's and the odometry's noise.
     pub seed: u64,
+    /// Where the true pose comes from.
+    pub pose_source: PoseSource,
+}
+
+/// Which Controller tells the simulated camera where it is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PoseSource {
+    /// A base on the ground: `nav.truePose`, the camera over the terrain under the base's
+    /// centre, level (stabilised in roll and pitch).
+    #[default]
+    Planar,
+    /// A legged robot: `legged.bodyPose`, the camera fixed to the body.
+    LeggedBody,
 }
 
 struct State {
@@ -55,28 +71,42 @@ pub async fn connect(connector: &Connector, config: IsmConfig) -> Result<Module,
         .handle(move |ctx, _q: AcquireDepth| {
             let (c, s) = (config.clone(), state.clone());
             async move {
-                let truth = pose_of(&ctx.query(&TruePose).await.map_err(|e| {
+                let said = |e| {
                     HandlerError::new(format!(
                         "nav.acquireDepth: the Controller did not say where the base is: {e}"
                     ))
-                })?);
-                Ok(acquire(&c, &s, truth))
+                };
+                let (truth, attitude) = match c.pose_source {
+                    PoseSource::Planar => {
+                        let p = pose_of(&ctx.query(&TruePose).await.map_err(said)?);
+                        (p, Attitude::level(c.terrain.height_at(p.x, p.y)))
+                    }
+                    PoseSource::LeggedBody => {
+                        body_pose_of(&ctx.query(&BodyPose).await.map_err(said)?)
+                    }
+                };
+                Ok(acquire(&c, &s, truth, attitude))
             }
         })
         .connect(connector)
         .await
 }
 
-fn acquire(config: &IsmConfig, state: &Mutex<State>, truth: Pose2) -> DepthFrame {
+fn acquire(
+    config: &IsmConfig,
+    state: &Mutex<State>,
+    truth: Pose2,
+    attitude: Attitude,
+) -> DepthFrame {
     let mut s = state.lock().unwrap_or_else(|p| p.into_inner());
     if let Some(last) = s.last_true {
         s.odometry.update(&last, &truth);
     }
     s.last_true = Some(truth);
-    let ground = config.terrain.height_at(truth.x, truth.y);
-    let image = s
-        .camera
-        .capture(&config.terrain, &config.mount.camera_pose(&truth, ground));
+    let image = s.camera.capture(
+        &config.terrain,
+        &config.mount.camera_pose(&truth, &attitude),
+    );
     let (width, height, depth_m) = depth_msg(&image);
     let frame = s.frames;
     s.frames += 1;
@@ -86,6 +116,8 @@ fn acquire(config: &IsmConfig, state: &Mutex<State>, truth: Pose2) -> DepthFrame
         height,
         depth_m,
         estimate: pose_msg(&s.odometry.estimate()),
-        ground_m: ground,
+        base_z_m: attitude.z_m,
+        base_roll_rad: attitude.roll_rad,
+        base_pitch_rad: attitude.pitch_rad,
     }
 }

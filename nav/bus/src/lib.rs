@@ -2,8 +2,9 @@
 //!
 //! | module | what | answers |
 //! | --- | --- | --- |
-//! | `controller` | the simulated differential-drive base | `nav.drive`, `nav.truePose`, `nav.simStatus` |
-//! | `ism` | the simulated stereo camera and drifting visual odometry | `nav.acquireDepth` |
+//! | `controller` | the simulated differential-drive base, or a walking robot's body-level Controller (its speeds into free-gait moves for the legged Controller) | `nav.drive`, `nav.truePose`, `nav.simStatus` |
+//! | `legged-controller` | a walking robot's legged Controller (the quasi-static simulator; walking bases only) | `legged.legMove`, `legged.bodyMove`, `legged.bodyPose`, `legged.legState`, ... |
+//! | `ism` | the simulated stereo camera (on the body of a walking robot) and drifting visual odometry | `nav.acquireDepth` |
 //! | `ltm` | the frame-aged terrain map and the danger map | `nav.insertDepth`, `nav.dangerMap` |
 //! | `navigator` | D* Lite over the danger map, exploration turns, the path follower | the `nav.navigate` goal, informing `nav.frame` every frame |
 //!
@@ -19,6 +20,9 @@ pub mod ltm;
 pub mod navigator;
 mod run;
 mod system;
+pub mod walking;
 
 pub use run::{BusRun, RUN_TIMEOUT, run_on_bus, run_on_bus_with, run_with};
-pub use system::{NAV_MODULES, NavSetup, connect_all, connect_module};
+pub use system::{
+    LEGGED_NAV_MODULES, LeggedBase, NAV_MODULES, NavBase, NavSetup, connect_all, connect_module,
+};

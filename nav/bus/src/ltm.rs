@@ -9,7 +9,7 @@ use tca_module::{Connector, HandlerError, Module, ModuleError};
 use tca_nav_messages::{DangerChanges, DangerMapQuery, InsertDepth};
 use tca_nav_navigator::{NavParams, PerceivedMap};
 
-use crate::convert::{change_msg, depth_of, grid_msg, pose_msg, pose_of};
+use crate::convert::{attitude_of, change_msg, depth_of, grid_msg, pose_msg, pose_of};
 
 /// How the LTM Manager runs.
 #[derive(Debug, Clone)]
@@ -65,7 +65,7 @@ fn insert(
     let image = depth_of(&q.frame, width, height)
         .map_err(|e| HandlerError::new(format!("nav.insertDepth: {e}")))?;
     let mut m = map.lock().unwrap_or_else(|p| p.into_inner());
-    let inserted = m.insert(pose_of(&q.frame.estimate), q.frame.ground_m, &image);
+    let inserted = m.insert(pose_of(&q.frame.estimate), &attitude_of(&q.frame), &image);
     Ok(DangerChanges {
         frames: m.frames(),
         estimate: pose_msg(&inserted.estimate),

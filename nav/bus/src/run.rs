@@ -156,7 +156,7 @@ pub async fn run_with(
     let computing: f64 = frames.iter().map(|f| f.loop_s).sum();
     let est = final_estimate.unwrap_or(sim.pose);
     let report = RunReport {
-        robot: "wheeled".into(),
+        robot: setup.base.name(),
         reached,
         reason,
         distance_m: sim.distance_m,

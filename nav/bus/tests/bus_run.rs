@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use tca_nav_bus::{NavSetup, run_on_bus};
+use tca_nav_bus::{NavBase, NavSetup, run_on_bus};
 use tca_nav_navigator::{
     RunOptions, RunReport, WheeledBase, WheeledParams, hill_course, run, wheeled_params,
 };
@@ -28,7 +28,7 @@ async fn a_run_on_the_bus_gives_the_one_process_report() {
     assert!(direct.reached, "{}", direct.reason);
     let setup = NavSetup {
         terrain: Arc::new(course.terrain.clone()),
-        wheeled: WheeledParams::PIONEER,
+        base: NavBase::Wheeled(WheeledParams::PIONEER),
         params: wheeled_params(),
         start: course.start,
         drift: opts.drift,
@@ -58,7 +58,7 @@ async fn an_impossible_goal_is_refused_with_a_reason() {
     let course = hill_course().unwrap();
     let setup = NavSetup {
         terrain: Arc::new(course.terrain.clone()),
-        wheeled: WheeledParams::PIONEER,
+        base: NavBase::Wheeled(WheeledParams::PIONEER),
         params: wheeled_params(),
         start: course.start,
         drift: 0.0,
@@ -93,7 +93,7 @@ async fn with_the_ltm_matcher_the_bus_run_is_the_one_process_run_too() {
     assert!(direct.registrations > 0, "{direct:?}");
     let setup = NavSetup {
         terrain: Arc::new(course.terrain.clone()),
-        wheeled: WheeledParams::PIONEER,
+        base: NavBase::Wheeled(WheeledParams::PIONEER),
         params,
         start: course.start,
         drift: opts.drift,

@@ -97,8 +97,13 @@ pub struct DepthFrame {
     pub depth_m: Vec<f32>,
     /// The odometry's estimate of the base's pose when the image was taken.
     pub estimate: PlanarPose,
-    /// The ground height under the base, m (height and tilt are measured; drift is planar).
-    pub ground_m: f64,
+    /// Height of the base's reference point, m: the ground under a wheeled base's centre,
+    /// a legged robot's body origin (height and tilt are measured; drift is planar).
+    pub base_z_m: f64,
+    /// Roll of the base, rad (0 for a base whose camera is stabilised).
+    pub base_roll_rad: f64,
+    /// Pitch of the base, rad (positive nose down).
+    pub base_pitch_rad: f64,
 }
 
 /// Query: put a depth frame into the terrain map and recompute the danger of what it saw.

@@ -36,7 +36,9 @@ fn a_depth_frame_survives_the_wire() {
             y_m: -2.0,
             yaw_rad: 0.5,
         },
-        ground_m: 0.25,
+        base_z_m: 0.25,
+        base_roll_rad: 0.01,
+        base_pitch_rad: -0.02,
     };
     let bytes = postcard::to_allocvec(&InsertDepth { frame: f.clone() }).unwrap();
     assert_eq!(

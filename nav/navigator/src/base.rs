@@ -1,6 +1,6 @@
 //! What the navigator drives.
 
-use tca_nav_sensing::Pose2;
+use tca_nav_sensing::{Attitude, Pose2};
 
 /// The outcome of one drive command.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -20,6 +20,9 @@ pub trait Base {
     fn name(&self) -> &str;
     /// The true pose (for the simulation and the report; the navigator never reads it).
     fn true_pose(&self) -> Pose2;
+    /// The true height and tilt (where the simulated camera is placed; the navigator is
+    /// given them as measured: drift is planar).
+    fn attitude(&self) -> Attitude;
     /// Drives at `forward_mps` and `turn_rps` for `dt_s` seconds.
     fn drive(&mut self, forward_mps: f64, turn_rps: f64, dt_s: f64) -> Motion;
 }

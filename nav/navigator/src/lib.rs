@@ -35,6 +35,6 @@ pub use picture::write_picture;
 pub use presets::{WHEELED_MOUNT, wheeled_params};
 pub use run::{RunOptions, RunReport, run, true_danger_map, true_map_path_m};
 pub use tca_nav_danger_map::DangerParams;
-pub use tca_nav_sensing::{CameraMount, Pose2};
+pub use tca_nav_sensing::{Attitude, CameraMount, Pose2};
 pub use tca_nav_terrain_map::MatchParams;
 pub use wheeled::{WheeledBase, WheeledParams};

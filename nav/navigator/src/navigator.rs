@@ -58,6 +58,14 @@ pub struct NavParams {
     /// still runs through unknown ground toward the goal rather than hugging what is
     /// already mapped.
     pub beta: f64,
+    /// Clearance kept from untraversable cells when planning, m: a traversable cell this
+    /// close to an untraversable one is planned as if its danger were at least 1 (just
+    /// barely traversable). The danger map already sizes the untraversable area to the
+    /// robot; this margin is for what the map and the position estimate cannot know
+    /// exactly (a boundary seen from one side, drift since the boundary was mapped, the
+    /// follower's tracking error), so that the path does not run along the edge of an
+    /// untraversable area where being off by a few centimetres puts the robot in it.
+    pub clearance_m: f64,
     /// The terrain map's age windows.
     pub ageing: Ageing,
     /// The camera.
@@ -93,6 +101,7 @@ impl NavParams {
         Self {
             danger,
             beta: 2.0,
+            clearance_m: 0.06,
             ageing: Ageing::PAPER,
             camera: CameraParams::stereo_default(),
             mount,
@@ -137,6 +146,10 @@ struct Exploration {
 pub struct Navigator {
     params: NavParams,
     cells: Grid<CellDanger>,
+    /// Per cell, the untraversable cells within the clearance (row-major).
+    near_untraversable: Vec<u32>,
+    /// Offsets of the cells within the clearance.
+    clearance_disc: Vec<(isize, isize)>,
     planner: DStarLite,
     goal: Point2<f64>,
     path: Vec<Cell>,
@@ -177,8 +190,20 @@ impl Navigator {
         let g = cell_of("goal", goal.x, goal.y)?;
         let mut planner = DStarLite::new(grid, s, g)?;
         let path = planner.plan()?.cells;
+        let r = (params.clearance_m / resolution_m).max(0.0);
+        let reach = r.floor() as isize;
+        let mut clearance_disc = Vec::new();
+        for dy in -reach..=reach {
+            for dx in -reach..=reach {
+                if ((dx * dx + dy * dy) as f64) <= r * r {
+                    clearance_disc.push((dx, dy));
+                }
+            }
+        }
         Ok(Self {
             params,
+            near_untraversable: vec![0; nx * ny],
+            clearance_disc,
             cells,
             planner,
             goal,
@@ -243,19 +268,30 @@ impl Navigator {
         let mut affected = false;
         if !changes.is_empty() {
             let near_path = self.path_neighbourhood();
+            let mut replanned = Vec::new();
             for change in changes {
                 let c = change.cell;
                 let Some(slot) = self.cells.get_mut(c) else {
                     return Err(NavError::ChangeOffMap { ix: c.ix, iy: c.iy });
                 };
-                let danger_changed = slot.danger != change.danger.danger;
+                let before = slot.danger;
                 *slot = change.danger;
-                if !danger_changed {
+                if before == change.danger.danger {
                     continue;
                 }
+                replanned.push(c);
+                let (was, is) = (before.is_finite(), change.danger.danger.is_finite());
+                if was != is {
+                    self.count_untraversable(c, if is { -1 } else { 1 }, &mut replanned);
+                }
+            }
+            replanned.sort_unstable_by_key(|c| (c.iy, c.ix));
+            replanned.dedup();
+            for c in replanned {
                 let cell = Cell::new(c.ix, c.iy);
-                self.planner.set_danger(cell, change.danger.danger)?;
-                if near_path.contains(&cell) {
+                if self.planner.set_danger(cell, self.planned_danger(c))?
+                    && near_path.contains(&cell)
+                {
                     affected = true;
                 }
             }
@@ -272,6 +308,37 @@ impl Navigator {
         }
         self.path = path;
         Ok(self.motion(estimate))
+    }
+
+    /// Counts an untraversable cell in (`delta` 1) or out (-1) of the clearance of the
+    /// cells around it, noting the cells whose clearance changes.
+    fn count_untraversable(&mut self, c: CellIndex, delta: i32, noted: &mut Vec<CellIndex>) {
+        let (nx, ny) = (self.cells.nx() as isize, self.cells.ny() as isize);
+        for &(dx, dy) in &self.clearance_disc {
+            let (x, y) = (c.ix as isize + dx, c.iy as isize + dy);
+            if x < 0 || y < 0 || x >= nx || y >= ny {
+                continue;
+            }
+            let i = (y * nx + x) as usize;
+            let before = self.near_untraversable[i];
+            let after = before.saturating_add_signed(delta);
+            self.near_untraversable[i] = after;
+            if (before == 0) != (after == 0) {
+                noted.push(CellIndex::new(x as usize, y as usize));
+            }
+        }
+    }
+
+    /// The danger D* Lite plans a cell with: the map's, raised to 1 within the clearance of
+    /// an untraversable cell.
+    fn planned_danger(&self, c: CellIndex) -> f64 {
+        let d = self.cells.get(c).map_or(1.0, |d| d.danger);
+        let i = c.iy * self.cells.nx() + c.ix;
+        if d.is_finite() && self.near_untraversable.get(i).is_some_and(|&n| n > 0) {
+            d.max(1.0)
+        } else {
+            d
+        }
     }
 
     fn path_neighbourhood(&self) -> std::collections::HashSet<Cell> {

@@ -3,7 +3,7 @@
 
 use nalgebra::{Isometry2, Point2, Point3, Translation2, UnitComplex, Vector2};
 use tca_nav_danger_map::{CellDanger, DangerMap};
-use tca_nav_sensing::{DepthImage, Pose2};
+use tca_nav_sensing::{Attitude, DepthImage, Pose2};
 use tca_nav_terrain_map::{Registration, TerrainMap};
 use tca_robot::CellIndex;
 
@@ -95,14 +95,14 @@ impl PerceivedMap {
         )
     }
 
-    /// Inserts one depth image taken from the odometry's estimate `estimate` standing on
-    /// `ground_m`, and recomputes the danger of the patch it saw plus a robot-sized border.
+    /// Inserts one depth image taken from the odometry's estimate `estimate` with the
+    /// measured height and tilt `attitude`, and recomputes the danger of the patch it saw plus a robot-sized border.
     /// With the matcher on, the frame is first registered against the map so far and placed
     /// with the corrected pose.
-    pub fn insert(&mut self, estimate: Pose2, ground_m: f64, image: &DepthImage) -> Inserted {
+    pub fn insert(&mut self, estimate: Pose2, attitude: &Attitude, image: &DepthImage) -> Inserted {
         self.frames += 1;
         let mut pose = self.corrected(estimate);
-        let cam = self.params.mount.camera_pose(&pose, ground_m);
+        let cam = self.params.mount.camera_pose(&pose, attitude);
         let mut points = image.points(&self.params.camera, &cam, self.params.map_range_m);
         let mut registration = None;
         if let Some(m) = &self.params.matcher {

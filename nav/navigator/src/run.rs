@@ -180,9 +180,9 @@ pub fn run(
             report.untraversable_frames += 1;
         }
         let t0 = Instant::now();
-        let ground = terrain.height_at(pose.x, pose.y);
-        let image = camera.capture(terrain, &mount.camera_pose(&pose, ground));
-        let inserted = map.insert(est, ground, &image);
+        let attitude = base.attitude();
+        let image = camera.capture(terrain, &mount.camera_pose(&pose, &attitude));
+        let inserted = map.insert(est, &attitude, &image);
         let est = inserted.estimate;
         report.estimated_path.push([est.x, est.y]);
         let step = nav.step(est, &inserted.changes);

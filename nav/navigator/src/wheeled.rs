@@ -1,6 +1,6 @@
 //! A small wheeled base with differential drive (the Pioneer 3-DX's role).
 
-use tca_nav_sensing::Pose2;
+use tca_nav_sensing::{Attitude, Pose2};
 use tca_robot::HeightField;
 
 use crate::{Base, Motion};
@@ -62,6 +62,10 @@ impl Base for WheeledBase<'_> {
 
     fn true_pose(&self) -> Pose2 {
         self.pose
+    }
+
+    fn attitude(&self) -> Attitude {
+        Attitude::level(self.terrain.height_at(self.pose.x, self.pose.y))
     }
 
     fn drive(&mut self, forward_mps: f64, turn_rps: f64, dt_s: f64) -> Motion {

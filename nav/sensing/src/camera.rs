@@ -116,27 +116,59 @@ impl CameraParams {
 /// Where the camera sits on the robot.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CameraMount {
-    /// Ahead of the robot's centre, m.
+    /// Ahead of the robot's reference point, m.
     pub forward_m: f64,
-    /// Above the ground under the robot's centre, m.
+    /// Above the robot's reference point, m: the ground under the centre of a wheeled
+    /// base, the body's origin of a legged robot (see [`Attitude`]).
     pub height_m: f64,
-    /// Downward tilt of the optical axis, rad.
+    /// Downward tilt of the optical axis from the robot's x axis, rad.
     pub pitch_down_rad: f64,
 }
 
+/// What a robot measures of its pose besides the planar pose its odometry estimates: the
+/// height of its reference point and its tilt. Drift is planar: the height and tilt are
+/// taken as known (an inclinometer and the visual odometry's six degrees of freedom give
+/// them well; the paper's own remedy for tilt drift is such a sensor).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Attitude {
+    /// Height of the reference point, m.
+    pub z_m: f64,
+    /// Roll about the robot's x axis, rad.
+    pub roll_rad: f64,
+    /// Pitch about the robot's y axis, rad (positive: nose down, as REP 103 has it).
+    pub pitch_rad: f64,
+}
+
+impl Attitude {
+    /// A level robot whose reference point is at `z_m` (a wheeled base's camera, which is
+    /// taken as stabilised in roll and pitch, over ground of that height).
+    pub fn level(z_m: f64) -> Self {
+        Self {
+            z_m,
+            roll_rad: 0.0,
+            pitch_rad: 0.0,
+        }
+    }
+
+    /// Whether every number is finite.
+    pub fn is_finite(&self) -> bool {
+        self.z_m.is_finite() && self.roll_rad.is_finite() && self.pitch_rad.is_finite()
+    }
+}
+
 impl CameraMount {
-    /// The camera's pose in the world for a robot at `pose` over ground of height
-    /// `ground_m` (the robot's tilt is ignored: the camera is taken as stabilised in roll
-    /// and pitch).
-    pub fn camera_pose(&self, pose: &Pose2, ground_m: f64) -> Isometry3<f64> {
-        let (s, c) = pose.yaw.sin_cos();
-        let t = Translation3::new(
-            pose.x + c * self.forward_m,
-            pose.y + s * self.forward_m,
-            ground_m + self.height_m,
+    /// The camera's pose in the world for a robot at the planar pose `pose` with the
+    /// height and tilt `attitude`.
+    pub fn camera_pose(&self, pose: &Pose2, attitude: &Attitude) -> Isometry3<f64> {
+        let body = Isometry3::from_parts(
+            Translation3::new(pose.x, pose.y, attitude.z_m),
+            UnitQuaternion::from_euler_angles(attitude.roll_rad, attitude.pitch_rad, pose.yaw),
         );
-        let r = UnitQuaternion::from_euler_angles(0.0, self.pitch_down_rad, pose.yaw);
-        Isometry3::from_parts(t, r)
+        let on_body = Isometry3::from_parts(
+            Translation3::new(self.forward_m, 0.0, self.height_m),
+            UnitQuaternion::from_euler_angles(0.0, self.pitch_down_rad, 0.0),
+        );
+        body * on_body
     }
 }
 

@@ -7,7 +7,7 @@ mod camera;
 mod odometry;
 mod pose;
 
-pub use camera::{CameraMount, CameraParams, DepthCamera, DepthImage, SensingError};
+pub use camera::{Attitude, CameraMount, CameraParams, DepthCamera, DepthImage, SensingError};
 pub use odometry::DriftingOdometry;
 pub use pose::{Pose2, wrap};
 

@@ -1,7 +1,7 @@
 //! The depth camera sees the terrain with stereo-like noise; odometry drifts as set.
 
 use nalgebra::Point2;
-use tca_nav_sensing::{CameraMount, CameraParams, DepthCamera, DriftingOdometry, Pose2};
+use tca_nav_sensing::{Attitude, CameraMount, CameraParams, DepthCamera, DriftingOdometry, Pose2};
 use tca_robot::HeightField;
 
 fn flat() -> HeightField {
@@ -20,7 +20,7 @@ fn depth_points_lie_on_the_ground_with_noise_growing_with_distance() {
     let mut params = CameraParams::stereo_default();
     params.untextured_fraction = 0.0;
     let mut cam = DepthCamera::new(params.clone(), 1).unwrap();
-    let pose = MOUNT.camera_pose(&Pose2::new(0.0, 0.0, 0.0), 0.0);
+    let pose = MOUNT.camera_pose(&Pose2::new(0.0, 0.0, 0.0), &Attitude::level(0.0));
     let img = cam.capture(&terrain, &pose);
     assert!(
         img.valid() > img.depth.len() / 2,
@@ -80,4 +80,44 @@ fn bad_camera_parameters_are_refused() {
             .to_string()
             .contains("hfov_rad")
     );
+}
+
+#[test]
+fn a_camera_on_a_tilted_body_tilts_with_it() {
+    let mount = CameraMount {
+        forward_m: 0.15,
+        height_m: 0.1,
+        pitch_down_rad: 0.5,
+    };
+    let planar = Pose2::new(1.0, 2.0, 0.0);
+    let level = mount.camera_pose(&planar, &Attitude::level(0.3));
+    // Level: 0.15 m ahead, 0.1 m above the reference point, looking 0.5 rad down.
+    let t = level.translation.vector;
+    assert!((t.x - 1.15).abs() < 1e-12 && (t.y - 2.0).abs() < 1e-12 && (t.z - 0.4).abs() < 1e-12);
+    let axis = level.rotation * nalgebra::Vector3::x();
+    assert!((axis.z + 0.5f64.sin()).abs() < 1e-12, "{axis:?}");
+    // Nose 0.1 rad further down: the camera lower at the front and looking 0.6 rad down.
+    let tilted = mount.camera_pose(
+        &planar,
+        &Attitude {
+            z_m: 0.3,
+            roll_rad: 0.0,
+            pitch_rad: 0.1,
+        },
+    );
+    let axis = tilted.rotation * nalgebra::Vector3::x();
+    assert!((axis.z + 0.6f64.sin()).abs() < 1e-12, "{axis:?}");
+    assert!(tilted.translation.z < level.translation.z);
+    // Rolled left side up: the body's down leans left, and so does the downward-looking
+    // optical axis.
+    let rolled = mount.camera_pose(
+        &planar,
+        &Attitude {
+            z_m: 0.3,
+            roll_rad: 0.2,
+            pitch_rad: 0.0,
+        },
+    );
+    let axis = rolled.rotation * nalgebra::Vector3::x();
+    assert!(axis.y > 0.05, "{axis:?}");
 }

@@ -10,7 +10,7 @@ use foxglove::Decode;
 use foxglove::messages::{FrameTransforms, Grid, Log, RawImage, SceneUpdate};
 use tca_foxglove::{WellKnown, WellKnownState};
 use tca_messages::*;
-use tca_nav_bus::{NavSetup, run_on_bus};
+use tca_nav_bus::{NavBase, NavSetup, run_on_bus};
 use tca_nav_messages as nav;
 use tca_nav_navigator::{RunOptions, WheeledParams, hill_course, wheeled_params};
 
@@ -51,7 +51,9 @@ fn hand_made_navigation_messages_become_well_known_ones() {
         height: 2,
         depth_m: vec![1.0, 0.0, 2.5, 3.0, 3.5, 4.0],
         estimate: pose(1.0, 2.0, 0.0),
-        ground_m: 0.1,
+        base_z_m: 0.1,
+        base_roll_rad: 0.0,
+        base_pitch_rad: 0.0,
     };
     let out = s.feed(
         &envelope("ism", "nav.acquireDepth", Class::Reply, &frame),
@@ -286,7 +288,7 @@ async fn an_exported_hill_navigation_shows_camera_map_frames_and_plan() {
     };
     let setup = NavSetup {
         terrain: Arc::new(course.terrain.clone()),
-        wheeled: WheeledParams::PIONEER,
+        base: NavBase::Wheeled(WheeledParams::PIONEER),
         params,
         start: course.start,
         drift: opts.drift,
