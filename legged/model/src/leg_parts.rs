@@ -43,6 +43,11 @@ impl LegParts {
         self.moment
     }
 
+    /// The capsules filling the links: axis ends (body frame) and radius.
+    pub fn capsules(&self) -> impl Iterator<Item = (Point3<f64>, Point3<f64>, f64)> + '_ {
+        self.parts.iter().map(|p| (p.a, p.b, p.r))
+    }
+
     /// Whether a capsule of these links and one of `other`'s (another leg) are nearer than
     /// their radii plus twice `margin_m`: the test [`RobotModel::legs_touching`] makes
     /// between two legs.
