@@ -24,7 +24,11 @@ impl FootSearch<'_> {
     pub(crate) fn foot_centre(&self, leg: usize, f: FootCell) -> Option<Point3<f64>> {
         let g = self.space.foot().height(f.0, f.1)?;
         let c = self.foot_xy(leg, f);
-        Some(Point3::new(c.x, c.y, g + self.space.robot().foot_radius[leg]))
+        Some(Point3::new(
+            c.x,
+            c.y,
+            g + self.space.robot().foot_radius[leg],
+        ))
     }
 
     /// Where leg `leg`'s foot stands on cell `f`, world X, Y: the cell's centre, or where the
@@ -124,10 +128,12 @@ impl FootSearch<'_> {
         if pts.len() < 3 {
             return false;
         }
-        let com = self.legs.com(poses.iter().enumerate().map(|(l, p)| match swap {
-            Some((s, parts)) if s == l => parts,
-            _ => &p.parts,
-        }));
+        let com = self
+            .legs
+            .com(poses.iter().enumerate().map(|(l, p)| match swap {
+                Some((s, parts)) if s == l => parts,
+                _ => &p.parts,
+            }));
         support_polygon(&pts).signed_distance(body.to_world_xy(com))
             >= self.space.robot().stability_margin_m
     }
@@ -147,19 +153,16 @@ impl FootSearch<'_> {
     /// height `z`: every standing foot reached there and half-way, the legs clear of each
     /// other at both, the centre of mass held there.
     pub(crate) fn advance_ok(&self, s: &Stance, z: f64) -> bool {
-        DBG[30].fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let from = self.body(s.k, s.body_z());
         let to = self.body(s.k + 1, f64::from(millimetres(z)) / 1000.0);
         let n = self.samples((to.at - from.at).norm() + (to.z - from.z).abs());
         let ok = (1..=n).all(|i| {
-            DBG[31].fetch_add(0, std::sync::atomic::Ordering::Relaxed);
             let b = from.lerp(&to, i as f64 / n as f64);
-            match self.poses_at(&b, s) { None => { DBG[34].fetch_add(1, std::sync::atomic::Ordering::Relaxed); false }
-                Some(p) => { let a = self.legs_clear(s, &p); if !a { DBG[35].fetch_add(1, std::sync::atomic::Ordering::Relaxed); } let c = self.held_clear(s, &b, &p); if !c { DBG[36].fetch_add(1, std::sync::atomic::Ordering::Relaxed); } a && c } }
+            self.poses_at(&b, s)
+                .is_some_and(|p| self.legs_clear(s, &p) && self.held_clear(s, &b, &p))
         }) && self
             .poses_at(&to, s)
             .is_some_and(|p| self.held(&to, &s.feet, None, &p, None));
-        if !ok { DBG[32].fetch_add(1, std::sync::atomic::Ordering::Relaxed); }
         self.note(ok)
     }
 
@@ -225,21 +228,21 @@ impl FootSearch<'_> {
         let robot = self.space.robot();
         let body = self.body(s.k, s.body_z());
         let Some(target) = self.foot_centre(leg, f) else {
-            DBG[1].fetch_add(1, std::sync::atomic::Ordering::Relaxed); return false;
+            return false;
         };
         // Where the foot is: on its cell, or up where a lift left it.
         let start = match s.feet[leg] {
             Some(c) => self.foot_centre(leg, c),
-            None => self
-                .held_point(s, leg)
-                .map(|p| body.isometry() * p),
+            None => self.held_point(s, leg).map(|p| body.isometry() * p),
         };
         let rise = robot.swing_rise_m;
         let r = robot.foot_radius[leg];
         let mut top = start.map_or(target.z, |a| a.z.max(target.z)) + rise;
         if let Some(a) = start {
             let cell = self.space.grid().cell_m;
-            let n = ((a.xy() - target.xy()).norm() / (cell / 2.0)).ceil().max(1.0) as usize;
+            let n = ((a.xy() - target.xy()).norm() / (cell / 2.0))
+                .ceil()
+                .max(1.0) as usize;
             for i in 0..=n {
                 let p = a.xy() + (target.xy() - a.xy()) * (i as f64 / n as f64);
                 let (ix, iy) = self.space.grid().xy_of(p);
@@ -250,33 +253,34 @@ impl FootSearch<'_> {
         }
         let raised = |p: Point3<f64>| self.legs.at(leg, body.to_body(Point3::new(p.x, p.y, top)));
         let Some(down) = self.legs.at(leg, body.to_body(target)) else {
-            DBG[2].fetch_add(1, std::sync::atomic::Ordering::Relaxed); return false;
+            return false;
         };
         let Some(high) = raised(target) else {
-            DBG[3].fetch_add(1, std::sync::atomic::Ordering::Relaxed); return false;
+            return false;
         };
         let others = |parts: &LegParts| self.clear_of_others(leg, parts, s, poses, 0);
         if !others(&down.parts) || !others(&high.parts) {
-            DBG[4].fetch_add(1, std::sync::atomic::Ordering::Relaxed); return false;
+            return false;
         }
-        let held = |parts: &LegParts| self.held(&body, &s.feet, Some(leg), poses, Some((leg, parts)));
+        let held =
+            |parts: &LegParts| self.held(&body, &s.feet, Some(leg), poses, Some((leg, parts)));
         if !held(&high.parts) {
-            DBG[5].fetch_add(1, std::sync::atomic::Ordering::Relaxed); return false;
+            return false;
         }
         let Some(a) = start else {
             return true;
         };
         let Some(low) = raised(a) else {
-            DBG[6].fetch_add(1, std::sync::atomic::Ordering::Relaxed); return false;
+            return false;
         };
         if !others(&low.parts) || !held(&low.parts) {
-            DBG[7].fetch_add(1, std::sync::atomic::Ordering::Relaxed); return false;
+            return false;
         }
         let n = self.samples((a.xy() - target.xy()).norm());
         (1..n).all(|i| {
             self.legs
                 .between(leg, &low, &high, i as f64 / n as f64)
-                .is_some_and(|p| { let a = others(&p); let b = held(&p); if !a {DBG[20].fetch_add(1, std::sync::atomic::Ordering::Relaxed);} if !b {DBG[21].fetch_add(1, std::sync::atomic::Ordering::Relaxed);} a && b })
+                .is_some_and(|p| others(&p) && held(&p))
         })
     }
 
@@ -295,7 +299,6 @@ impl FootSearch<'_> {
                 self.held(&body, &s.feet, Some(leg), poses, Some((leg, &up.parts)))
                     && self.clear_of_others(leg, &up.parts, s, poses, 0)
             });
-        if !ok { DBG[33].fetch_add(1, std::sync::atomic::Ordering::Relaxed); }
         self.note(ok)
     }
 
@@ -312,6 +315,3 @@ impl FootSearch<'_> {
         ok
     }
 }
-
-/// debug
-pub static DBG: [std::sync::atomic::AtomicU64; 40] = [const { std::sync::atomic::AtomicU64::new(0) }; 40];

@@ -135,7 +135,7 @@ impl Default for SearchParams {
             candidates: 4,
             lookahead: 40,
             moves_between_advances: 12,
-            stall_nodes: 4_000,
+            stall_nodes: 1_000,
         }
     }
 }
@@ -255,7 +255,8 @@ pub struct FootSearch<'a> {
     forbidden: HashSet<(Stance, Stance)>,
     pub(crate) legs: Legs<'a>,
     /// How many route cells ahead a foothold stays usable, by leg, route index and cell.
-    pub(crate) useful: std::cell::RefCell<std::collections::HashMap<(usize, usize, FootCell), usize>>,
+    pub(crate) useful:
+        std::cell::RefCell<std::collections::HashMap<(usize, usize, FootCell), usize>>,
     pub(crate) refused_by_legs: std::cell::Cell<u64>,
     refused_by_check: u64,
     /// Where the body stands at the route's first cell, when it is not the cell's centre.
@@ -329,10 +330,7 @@ impl<'a> FootSearch<'a> {
     pub fn with_start(mut self, at: (Point2<f64>, f64), feet: &[Option<Point2<f64>>]) -> Self {
         let grid = self.space.grid();
         self.start_at = Some(at);
-        self.start_feet = feet
-            .iter()
-            .map(|p| p.map(|p| (grid.xy_of(p), p)))
-            .collect();
+        self.start_feet = feet.iter().map(|p| p.map(|p| (grid.xy_of(p), p))).collect();
         self
     }
 
@@ -443,14 +441,16 @@ impl<'a> FootSearch<'a> {
                 continue;
             }
             if !self.forbidden.is_empty()
-                && self.forbidden.contains(&(top.stance.clone(), child.clone()))
+                && self
+                    .forbidden
+                    .contains(&(top.stance.clone(), child.clone()))
             {
                 continue;
             }
             if !self.move_ok(&top.stance, &top.poses, &step) {
                 // Refused moves cost the budget too, a quarter of a node each.
                 refusals += 1;
-                if refusals % 4 == 0 {
+                if refusals.is_multiple_of(4) {
                     stall += 1;
                     if stall > self.params.stall_nodes {
                         break;

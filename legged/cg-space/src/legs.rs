@@ -17,6 +17,9 @@ use tca_legged_model::{IkOptions, LegParts, RobotModel};
 /// Body-frame targets are rounded to this before their leg is worked out, metres.
 const QUANTUM_M: f64 = 0.005;
 
+/// Leg poses worked out so far, by leg and quantised body-frame target.
+type PoseCache = HashMap<(usize, [i64; 3]), Option<Rc<LegPose>>>;
+
 /// One leg with its foot at a point: joints and parts.
 #[derive(Debug, Clone)]
 pub struct LegPose {
@@ -56,10 +59,7 @@ impl BodyPose {
     /// A body-frame point's world X, Y.
     pub fn to_world_xy(&self, p: Point3<f64>) -> Point2<f64> {
         let (s, c) = self.theta.sin_cos();
-        Point2::new(
-            self.at.x + c * p.x - s * p.y,
-            self.at.y + s * p.x + c * p.y,
-        )
+        Point2::new(self.at.x + c * p.x - s * p.y, self.at.y + s * p.x + c * p.y)
     }
 
     /// Part of the way to `other` (`t` 0 here, 1 there; the heading the short way round).
@@ -82,7 +82,7 @@ pub struct Legs<'a> {
     neutral: Vec<Rc<LegPose>>,
     body_mass: f64,
     body_moment: Vector3<f64>,
-    cache: RefCell<HashMap<(usize, [i64; 3]), Option<Rc<LegPose>>>>,
+    cache: RefCell<PoseCache>,
     solved: RefCell<u64>,
 }
 
@@ -138,16 +138,13 @@ impl<'a> Legs<'a> {
             ..IkOptions::default()
         };
         *self.solved.borrow_mut() += 1;
-        let pose = l
-            .inverse_kinematics(&target, &options)
-            .ok()
-            .and_then(|s| {
-                let parts = self.model.leg_parts(leg, &s.joints).ok()?;
-                Some(Rc::new(LegPose {
-                    joints: s.joints,
-                    parts,
-                }))
-            });
+        let pose = l.inverse_kinematics(&target, &options).ok().and_then(|s| {
+            let parts = self.model.leg_parts(leg, &s.joints).ok()?;
+            Some(Rc::new(LegPose {
+                joints: s.joints,
+                parts,
+            }))
+        });
         self.cache.borrow_mut().insert(key, pose.clone());
         pose
     }
@@ -224,10 +221,7 @@ mod tests {
         let again = b.isometry() * local;
         assert!((again - w).norm() < 1e-12);
         assert!((b.to_world_xy(local) - Point2::new(w.x, w.y)).norm() < 1e-12);
-        let other = BodyPose {
-            theta: -3.0,
-            ..b
-        };
+        let other = BodyPose { theta: -3.0, ..b };
         // Half-way from 0.7 to -3.0 rad the short way round passes through π.
         let mid = b.lerp(&other, 0.5);
         assert!((mid.theta - (0.7 + (std::f64::consts::TAU - 3.7) / 2.0)).abs() < 1e-12);

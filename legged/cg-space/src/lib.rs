@@ -61,11 +61,11 @@ pub use footplan::{
     apply as apply_step, millimetres,
 };
 pub use grid::{CgCell, CgGrid};
+pub use legs::{BodyPose, LegPose, Legs};
 pub use picture::{
     Layout, PictureError, PictureOptions, draw_cg_space, footfalls, stances, start_stance,
     write_cg_space_png,
 };
-pub use legs::{BodyPose, LegPose, Legs};
 pub use planner::{Plan, PlanParams, Standing, plan, plan_checked};
 pub use robot::{CgParams, CgRobot};
 pub use route::{Flood, Route, RouteParams, flood, plan_route, roadmap};

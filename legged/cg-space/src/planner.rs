@@ -7,8 +7,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::CgError;
 use crate::footplan::{
-    FootCell, FootPlan, FootSearch, FootStep, MoveCheck, SearchCounts, SearchFailure,
-    SearchParams, Stance, apply, millimetres,
+    FootCell, FootPlan, FootSearch, FootStep, MoveCheck, SearchCounts, SearchFailure, SearchParams,
+    Stance, apply, millimetres,
 };
 use crate::grid::CgCell;
 use crate::route::{Route, RouteParams, plan_route};
@@ -34,8 +34,8 @@ impl Default for PlanParams {
         PlanParams {
             route: RouteParams::default(),
             search: SearchParams::default(),
-            max_replans: 30,
-            mark_radius: 0,
+            max_replans: 60,
+            mark_radius: 2,
         }
     }
 }
@@ -199,9 +199,12 @@ pub fn plan_checked(
                 for dy in -r..=r {
                     for dx in -r..=r {
                         let c = CgCell::new(bad.ix + dx, bad.iy + dy, bad.it);
-                        // The cells the route has already passed and the goal stay usable.
+                        // The cells the route has already passed, the goal and the cells
+                        // beside it stay usable (marking those would wall the goal in).
+                        let by_goal =
+                            c.it == g.it && (c.ix - g.ix).abs() <= 1 && (c.iy - g.iy).abs() <= 1;
                         if c == bad
-                            || (c != g
+                            || (!by_goal
                                 && space.grid().contains(c)
                                 && !route[..=fail.furthest].contains(&c))
                         {

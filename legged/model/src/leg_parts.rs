@@ -146,9 +146,10 @@ mod tests {
                             .enumerate()
                             .map(|(i, q)| model.leg_parts(i, q).expect("parts"))
                             .collect();
-                        let pairs = parts.iter().enumerate().any(|(i, p)| {
-                            parts.iter().skip(i + 1).any(|o| p.touches(o, 0.01))
-                        });
+                        let pairs = parts
+                            .iter()
+                            .enumerate()
+                            .any(|(i, p)| parts.iter().skip(i + 1).any(|o| p.touches(o, 0.01)));
                         let whole = model
                             .legs_touching(&posture, None, 0.01)
                             .expect("posture")
@@ -172,6 +173,9 @@ mod tests {
                 }
             }
         }
-        assert!(touching > 0 && clear > 0, "{touching} touching, {clear} clear");
+        assert!(
+            touching > 0 && clear > 0,
+            "{touching} touching, {clear} clear"
+        );
     }
 }
