@@ -184,6 +184,13 @@ pub fn plan_checked(
                         detail: "the search failed at the goal".into(),
                     });
                 };
+                // Where the goal's cell cannot be stepped into from the cell before it, that
+                // cell is marked instead: the next route comes to the goal from elsewhere.
+                let bad = if bad == g && fail.furthest > 0 {
+                    route[fail.furthest]
+                } else {
+                    bad
+                };
                 if bad == g {
                     return Err(CgError::NoFootfalls {
                         replans: marked.len(),
