@@ -1,26 +1,89 @@
 //! The foot-level search along a CG route: depth first, each move advancing the CG one
-//! cell or moving, placing or lifting one foot, tried in a fixed order of priority.
+//! cell or moving, placing or lifting one foot, tried in a fixed order of priority
+//! ([`footmoves`](crate::footmoves)); each move checked on the robot's own legs
+//! ([`footcheck`](crate::footcheck)) before the search takes it.
 
 use std::collections::HashSet;
 
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
-use tca_stability::support_polygon;
 
 use crate::grid::CgCell;
+use std::rc::Rc;
+
+use crate::footmoves::Offer;
+use crate::legs::{BodyPose, LegPose, Legs};
 use crate::space::CgSpace;
-use crate::validity::{foot_interval, min_body_height};
+use crate::validity::min_body_height;
 
 /// A foot cell: column and row on the CG grid.
 pub type FootCell = (i32, i32);
 
-/// Where the robot stands: its place on the route and each foot (`None`: lifted).
+/// Where the robot stands: its place on the route, each foot (`None`: lifted) and the
+/// height its body stands at.
 #[derive(Debug, Clone, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub struct Stance {
     /// Index of the CG cell on the route.
     pub k: usize,
     /// Each leg's foot cell, `None` for a foot held up.
     pub feet: Vec<Option<FootCell>>,
+    /// World Z of the body origin, millimetres.
+    pub z_mm: i32,
+    /// Where each foot held up was lifted from (empty, or `None` for a leg, where that is
+    /// not known): a lifted foot rides with the body.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held: Vec<Option<Held>>,
+}
+
+/// Where a foot held up was lifted: its foot cell, and the route cell and body height the
+/// body had then; the foot stays where the lift put it in the body frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct Held {
+    /// The foot cell it stood on.
+    pub from: FootCell,
+    /// The route index of the body then.
+    pub k: usize,
+    /// The body's height then, millimetres.
+    pub z_mm: i32,
+}
+
+impl Stance {
+    /// A stance with no foot known to be held up.
+    pub fn new(k: usize, feet: Vec<Option<FootCell>>, z_mm: i32) -> Self {
+        Stance {
+            k,
+            feet,
+            z_mm,
+            held: Vec::new(),
+        }
+    }
+
+    /// World Z of the body origin, metres.
+    pub fn body_z(&self) -> f64 {
+        f64::from(self.z_mm) / 1000.0
+    }
+
+    /// Where leg `leg`'s foot was lifted from, if it is held up and that is known.
+    pub fn held(&self, leg: usize) -> Option<Held> {
+        self.held.get(leg).copied().flatten()
+    }
+
+    fn set_held(&mut self, leg: usize, h: Option<Held>) {
+        if h.is_some() && self.held.len() < self.feet.len() {
+            self.held.resize(self.feet.len(), None);
+        }
+        if let Some(slot) = self.held.get_mut(leg) {
+            *slot = h;
+        }
+        if self.held.iter().all(Option::is_none) {
+            self.held.clear();
+        }
+    }
+}
+
+/// A body height in whole millimetres, as a [`Stance`] holds it.
+pub fn millimetres(z: f64) -> i32 {
+    (z * 1000.0).round() as i32
 }
 
 /// One move of the foot-level plan.
@@ -72,7 +135,7 @@ impl Default for SearchParams {
             candidates: 4,
             lookahead: 40,
             moves_between_advances: 12,
-            stall_nodes: 4_000,
+            stall_nodes: 1_000,
         }
     }
 }
@@ -106,9 +169,23 @@ impl FootPlan {
 /// Applies a step to a stance.
 pub fn apply(s: &mut Stance, step: &FootStep) {
     match *step {
-        FootStep::Advance { .. } => s.k += 1,
-        FootStep::Place { leg, to, .. } => s.feet[leg] = Some(to),
-        FootStep::Lift { leg, .. } => s.feet[leg] = None,
+        FootStep::Advance { body_z, .. } => {
+            s.k += 1;
+            s.z_mm = millimetres(body_z);
+        }
+        FootStep::Place { leg, to, .. } => {
+            s.feet[leg] = Some(to);
+            s.set_held(leg, None);
+        }
+        FootStep::Lift { leg, from } => {
+            s.feet[leg] = None;
+            let held = Held {
+                from,
+                k: s.k,
+                z_mm: s.z_mm,
+            };
+            s.set_held(leg, Some(held));
+        }
     }
 }
 
@@ -123,10 +200,11 @@ pub struct SearchFailure {
     pub nodes: usize,
 }
 
-/// A check of each move the search considers, beyond CG-space's own tests: for example
-/// that the real robot can carry it out (reach along the way, contacts between its legs,
-/// its parts against the terrain). The search calls it before it enters a stance, with the
-/// route cells of both stances; a move it refuses is not taken from that stance.
+/// A check of the planned moves beyond the search's own: for example that the real robot
+/// can carry each out along the way (reach, contacts between its legs, its parts against
+/// the terrain), as its controller would plan it. The planner puts each plan the search
+/// finds to it move by move, in order, with the route cells of both stances; at the first
+/// move it refuses, that move is forbidden from that stance and the search runs again.
 pub trait MoveCheck {
     /// Whether the move `step` from `from` (at route cell `from_cell`) to `to` (at
     /// `to_cell`) can be carried out.
@@ -142,18 +220,49 @@ pub trait MoveCheck {
 
 /// A leg's reach at a foot cell: the lowest and highest contact-centre heights (body z) and
 /// the quadrant (see [`RangeCell`](crate::robot::RangeCell)).
-type Reach = (f64, f64, u8);
+pub(crate) type Reach = (f64, f64, u8);
+
+/// What the search counted.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SearchCounts {
+    /// Moves the search's own checks on the legs refused.
+    pub refused_by_legs: u64,
+    /// Moves the outside [`MoveCheck`] refused.
+    pub refused_by_check: u64,
+    /// Inverse kinematics solved for the legs.
+    pub leg_poses: u64,
+}
+
+impl SearchCounts {
+    /// Adds another search's counts.
+    pub fn add(&mut self, other: &SearchCounts) {
+        self.refused_by_legs += other.refused_by_legs;
+        self.refused_by_check += other.refused_by_check;
+        self.leg_poses += other.leg_poses;
+    }
+}
 
 /// The geometry the search asks about, for one route.
 pub struct FootSearch<'a> {
-    space: &'a CgSpace,
-    route: &'a [CgCell],
-    min_h: Vec<f64>,
-    params: SearchParams,
+    pub(crate) space: &'a CgSpace,
+    pub(crate) route: &'a [CgCell],
+    pub(crate) min_h: Vec<f64>,
+    pub(crate) params: SearchParams,
     /// Per heading bin and leg: the range as a dense square of side `2 * half + 1`.
     lookup: Vec<Vec<Vec<Option<Reach>>>>,
     half: i32,
-    check: Option<&'a dyn MoveCheck>,
+    /// Moves (from one stance to another) never to be taken.
+    forbidden: HashSet<(Stance, Stance)>,
+    pub(crate) legs: Legs<'a>,
+    /// How many route cells ahead a foothold stays usable, by leg, route index and cell.
+    pub(crate) useful:
+        std::cell::RefCell<std::collections::HashMap<(usize, usize, FootCell), usize>>,
+    pub(crate) refused_by_legs: std::cell::Cell<u64>,
+    refused_by_check: u64,
+    /// Where the body stands at the route's first cell, when it is not the cell's centre.
+    start_at: Option<(Point2<f64>, f64)>,
+    /// Per leg, the foot cell it stands on at the start and where on it.
+    pub(crate) start_feet: Vec<Option<(FootCell, Point2<f64>)>>,
 }
 
 impl<'a> FootSearch<'a> {
@@ -205,18 +314,44 @@ impl<'a> FootSearch<'a> {
             params,
             lookup,
             half,
-            check: None,
+            forbidden: HashSet::new(),
+            legs: Legs::new(&robot.model),
+            useful: Default::default(),
+            refused_by_legs: std::cell::Cell::new(0),
+            refused_by_check: 0,
+            start_at: None,
+            start_feet: Vec::new(),
         }
     }
 
-    /// The search with a check of every move it considers.
-    pub fn with_check(mut self, check: Option<&'a dyn MoveCheck>) -> Self {
-        self.check = check;
+    /// The search with the robot standing as it does: the body at `at` (world X, Y and
+    /// heading) at the route's first cell, and each foot where `feet` puts it (world X, Y)
+    /// for as long as it stays on that cell, rather than at the cells' centres.
+    pub fn with_start(mut self, at: (Point2<f64>, f64), feet: &[Option<Point2<f64>>]) -> Self {
+        let grid = self.space.grid();
+        self.start_at = Some(at);
+        self.start_feet = feet.iter().map(|p| p.map(|p| (grid.xy_of(p), p))).collect();
         self
     }
 
+    /// Forbids the move from stance `from` to stance `to` in the searches to come (a move
+    /// the outside check refused).
+    pub fn forbid(&mut self, from: Stance, to: Stance) {
+        self.refused_by_check += 1;
+        self.forbidden.insert((from, to));
+    }
+
+    /// What the search counted so far.
+    pub fn counts(&self) -> SearchCounts {
+        SearchCounts {
+            refused_by_legs: self.refused_by_legs.get(),
+            refused_by_check: self.refused_by_check,
+            leg_poses: self.legs.solved(),
+        }
+    }
+
     /// Leg `leg`'s reach interval and quadrant for a foot cell seen from route cell `k`.
-    fn range(&self, leg: usize, k: usize, f: FootCell) -> Option<Reach> {
+    pub(crate) fn range(&self, leg: usize, k: usize, f: FootCell) -> Option<Reach> {
         let cg = self.route[k];
         let (di, dj) = (f.0 - cg.ix, f.1 - cg.iy);
         if di.abs() > self.half || dj.abs() > self.half {
@@ -227,279 +362,37 @@ impl<'a> FootSearch<'a> {
             [((dj + self.half) as usize) * side + (di + self.half) as usize]
     }
 
-    /// The body-height interval at route cell `k` for the standing feet (`skip`: a foot
-    /// to leave out, `extra`: a foot to add); `None` if a foot is out of range or the
-    /// interval is empty.
-    fn heights(
-        &self,
-        k: usize,
-        feet: &[Option<FootCell>],
-        skip: Option<usize>,
-        extra: Option<(usize, FootCell)>,
-    ) -> Option<(f64, f64)> {
-        let (mut lo, mut hi) = (self.min_h[k], f64::INFINITY);
-        let robot = self.space.robot();
-        let foot = self.space.foot();
-        let standing = feet
-            .iter()
-            .enumerate()
-            .filter(|(l, _)| Some(*l) != skip && extra.is_none_or(|(e, _)| e != *l))
-            .filter_map(|(l, f)| f.map(|f| (l, f)))
-            .chain(extra);
-        for (l, f) in standing {
-            let (z_lo, z_hi, _) = self.range(l, k, f)?;
-            let g = foot.height(f.0, f.1)?;
-            let (a, b) = foot_interval(g, robot.foot_radius[l], z_lo, z_hi);
-            lo = lo.max(a);
-            hi = hi.min(b);
+    /// The body's pose at route cell `k`, its origin at height `z`.
+    pub(crate) fn body(&self, k: usize, z: f64) -> BodyPose {
+        if k == 0
+            && let Some((at, theta)) = self.start_at
+        {
+            return BodyPose { at, z, theta };
         }
-        (lo <= hi).then_some((lo, hi))
-    }
-
-    /// The CG's world position at route cell `k`.
-    fn cg(&self, k: usize) -> Point2<f64> {
         let c = self.route[k];
         let grid = self.space.grid();
-        let (s, co) = grid.theta(c.it).sin_cos();
-        let com = self.space.robot().com;
-        grid.centre(c.ix, c.iy)
-            + nalgebra::Vector2::new(co * com.x - s * com.y, s * com.x + co * com.y)
-    }
-
-    /// Whether the standing feet (less `skip`) hold the CG at route cell `k` with the margin.
-    fn stable(&self, k: usize, feet: &[Option<FootCell>], skip: Option<usize>) -> bool {
-        let grid = self.space.grid();
-        let pts: Vec<Point2<f64>> = feet
-            .iter()
-            .enumerate()
-            .filter(|(l, _)| Some(*l) != skip)
-            .filter_map(|(_, f)| f.map(|f| grid.centre(f.0, f.1)))
-            .collect();
-        if pts.len() < 3 {
-            return false;
+        BodyPose {
+            at: grid.centre(c.ix, c.iy),
+            z,
+            theta: grid.theta(c.it),
         }
-        support_polygon(&pts).signed_distance(self.cg(k)) >= self.space.robot().stability_margin_m
-    }
-
-    /// How many route cells from `k` on a foothold stays usable for a leg.
-    fn usefulness(&self, leg: usize, k: usize, f: FootCell) -> usize {
-        let robot = self.space.robot();
-        let Some(g) = self.space.foot().height(f.0, f.1) else {
-            return 0;
-        };
-        let end = (k + self.params.lookahead).min(self.route.len());
-        (k..end)
-            .take_while(|&j| {
-                self.range(leg, j, f).is_some_and(|(z_lo, z_hi, _)| {
-                    let (_, b) = foot_interval(g, robot.foot_radius[leg], z_lo, z_hi);
-                    b >= self.min_h[j]
-                })
-            })
-            .count()
-    }
-
-    /// Footholds for `leg` at route cell `k`: valid, free, in range at `k` and (if there is
-    /// one) the next cell, compatible in height with the other standing feet, in quadrant
-    /// `want` of the next cell if given; best first.
-    fn footholds(
-        &self,
-        s: &Stance,
-        leg: usize,
-        want: Option<u8>,
-        want_at_current: bool,
-    ) -> Vec<FootCell> {
-        let k = s.k;
-        let next = (k + 1 < self.route.len()).then_some(k + 1);
-        let cg = self.route[k];
-        let robot = self.space.robot();
-        let table = &robot.headings[usize::from(cg.it)];
-        let ahead = self.route[(k + self.params.lookahead).min(self.route.len() - 1)];
-        let (ax, ay) = (f64::from(ahead.ix - cg.ix), f64::from(ahead.iy - cg.iy));
-        let mut out: Vec<(usize, f64, FootCell)> = Vec::new();
-        for c in &table.legs[leg] {
-            let f = (cg.ix + c.di, cg.iy + c.dj);
-            if Some(f) == s.feet[leg] || !self.space.foot().valid(f.0, f.1) {
-                continue;
-            }
-            if s.feet
-                .iter()
-                .enumerate()
-                .any(|(l, o)| l != leg && *o == Some(f))
-            {
-                continue;
-            }
-            if let Some(q) = want {
-                let quadrant = if want_at_current {
-                    Some(c.quadrant)
-                } else {
-                    next.and_then(|n| self.range(leg, n, f)).map(|r| r.2)
-                };
-                if quadrant != Some(q) {
-                    continue;
-                }
-            }
-            if let Some(n) = next
-                && self.range(leg, n, f).is_none()
-            {
-                continue;
-            }
-            if self.heights(k, &s.feet, None, Some((leg, f))).is_none() {
-                continue;
-            }
-            // Ties (near the route's end) go to the foothold farthest along the way ahead.
-            let forward = f64::from(c.di) * ax + f64::from(c.dj) * ay;
-            out.push((self.usefulness(leg, k, f), forward, f));
-        }
-        out.sort_by(|a, b| b.0.cmp(&a.0).then(b.1.total_cmp(&a.1)).then(a.2.cmp(&b.2)));
-        out.into_iter()
-            .take(self.params.candidates)
-            .map(|(_, _, f)| f)
-            .collect()
-    }
-
-    /// Whether the foot of `leg` may leave the ground now (the rest hold the CG).
-    fn can_lift(&self, s: &Stance, leg: usize) -> bool {
-        self.stable(s.k, &s.feet, Some(leg))
-            && self.heights(s.k, &s.feet, Some(leg), None).is_some()
-    }
-
-    /// The moves from a stance, in the order of priority.
-    pub fn moves(&self, s: &Stance) -> Vec<FootStep> {
-        let k = s.k;
-        let mut out: Vec<FootStep> = Vec::new();
-        let Some(n) = (k + 1 < self.route.len()).then_some(k + 1) else {
-            return out;
-        };
-        let legs = s.feet.len();
-        let in_range_next: Vec<bool> = (0..legs)
-            .map(|l| s.feet[l].is_none_or(|f| self.range(l, n, f).is_some()))
-            .collect();
-        let all_in_range = in_range_next.iter().all(|&b| b);
-        let heights_next = all_in_range
-            .then(|| self.heights(n, &s.feet, None, None))
-            .flatten();
-        let stable_next = self.stable(n, &s.feet, None);
-        // 1. Advance the CG.
-        if let Some((lo, hi)) = heights_next
-            && stable_next
-        {
-            let body_z = if hi.is_finite() { (lo + hi) / 2.0 } else { lo };
-            out.push(FootStep::Advance {
-                to: self.route[n],
-                body_z,
-            });
-        }
-        // A free foot: the rest hold the CG here and at the next cell.
-        let free: Vec<bool> = (0..legs)
-            .map(|l| match s.feet[l] {
-                None => true,
-                Some(_) => self.can_lift(s, l) && self.stable(n, &s.feet, Some(l)),
-            })
-            .collect();
-        let push_places = |out: &mut Vec<FootStep>, leg: usize, want: Option<u8>, current: bool| {
-            if s.feet[leg].is_some() && !self.can_lift(s, leg) {
-                return;
-            }
-            for f in self.footholds(s, leg, want, current) {
-                let step = FootStep::Place {
-                    leg,
-                    from: s.feet[leg],
-                    to: f,
-                };
-                if !out.contains(&step) {
-                    out.push(step);
-                }
-            }
-        };
-        // 2. Moving is possible leg by leg but unstable: fill a deficient quadrant.
-        if all_in_range && !stable_next {
-            let mut have = [false; 4];
-            for (l, f) in s.feet.iter().enumerate() {
-                if let Some(f) = f
-                    && let Some((_, _, q)) = self.range(l, n, *f)
-                    && q < 4
-                {
-                    have[usize::from(q)] = true;
-                }
-            }
-            for q in (0..4u8).filter(|&q| !have[usize::from(q)]) {
-                for l in (0..legs).filter(|&l| free[l]) {
-                    push_places(&mut out, l, Some(q), false);
-                }
-            }
-        }
-        // 3. A free foot at the edge of its range moves; 4. or is lifted if it has nowhere.
-        let leaving: Vec<usize> = (0..legs)
-            .filter(|&l| s.feet[l].is_some() && !in_range_next[l])
-            .collect();
-        for &l in leaving.iter().filter(|&&l| free[l]) {
-            let before = out.len();
-            push_places(&mut out, l, None, false);
-            if out.len() == before
-                && let Some(from) = s.feet[l]
-                && self.can_lift(s, l)
-            {
-                out.push(FootStep::Lift { leg: l, from });
-            }
-        }
-        // Feet in the air come down where they will stay useful.
-        for l in (0..legs).filter(|&l| s.feet[l].is_none()) {
-            push_places(&mut out, l, None, false);
-        }
-        // 5. A foot about to leave its range that is not free: a free foot goes into its
-        // quadrant so that it becomes free.
-        for &l in leaving.iter().filter(|&&l| !free[l]) {
-            let Some(f) = s.feet[l] else { continue };
-            let Some((_, _, q)) = self.range(l, k, f) else {
-                continue;
-            };
-            if q > 3 {
-                continue;
-            }
-            for m in (0..legs).filter(|&m| m != l && free[m]) {
-                push_places(&mut out, m, Some(q), true);
-            }
-        }
-        // Last, so that the search stays complete over what it may try: any foot that may
-        // lift moves to any of its best footholds, and a foot that heights forbid lifts.
-        for l in 0..legs {
-            push_places(&mut out, l, None, false);
-        }
-        if heights_next.is_none() && all_in_range {
-            for l in 0..legs {
-                if let Some(from) = s.feet[l]
-                    && self.can_lift(s, l)
-                {
-                    let step = FootStep::Lift { leg: l, from };
-                    if !out.contains(&step) {
-                        out.push(step);
-                    }
-                }
-            }
-        }
-        out
     }
 
     /// Depth-first search from `start` to the route's last cell.
     pub fn search(&self, start: Stance) -> Result<FootPlan, SearchFailure> {
         struct Frame {
             stance: Stance,
-            moves: Vec<FootStep>,
+            poses: Vec<Rc<LegPose>>,
+            moves: Offer,
+            /// Per group of moves, how many the search entered.
+            entered: Vec<usize>,
             next: usize,
             since_advance: usize,
         }
         let last = self.route.len() - 1;
         let mut visited: HashSet<Stance> = HashSet::new();
         visited.insert(start.clone());
-        let mut stack = vec![Frame {
-            moves: self.moves(&start),
-            stance: start.clone(),
-            next: 0,
-            since_advance: 0,
-        }];
-        let mut path: Vec<FootStep> = Vec::new();
         let mut nodes = 1usize;
-        let (mut furthest, mut furthest_path, mut stall) = (start.k, Vec::new(), 0usize);
         if start.k >= last {
             return Ok(FootPlan {
                 route: self.route.to_vec(),
@@ -508,14 +401,32 @@ impl<'a> FootSearch<'a> {
                 nodes,
             });
         }
+        let mut stack = Vec::new();
+        if let Some(poses) = self.poses(&start) {
+            let moves = self.moves(&start);
+            stack.push(Frame {
+                entered: vec![0; moves.caps.len()],
+                moves,
+                poses,
+                stance: start.clone(),
+                next: 0,
+                since_advance: 0,
+            });
+        }
+        let mut path: Vec<FootStep> = Vec::new();
+        let (mut furthest, mut furthest_path, mut stall) = (start.k, Vec::new(), 0usize);
+        let mut refusals = 0usize;
         while let Some(top) = stack.last_mut() {
-            if top.next >= top.moves.len() {
+            if top.next >= top.moves.list.len() {
                 stack.pop();
                 path.pop();
                 continue;
             }
-            let step = top.moves[top.next];
+            let (step, group) = top.moves.list[top.next];
             top.next += 1;
+            if top.entered[group] >= top.moves.caps[group] {
+                continue;
+            }
             let since = if matches!(step, FootStep::Advance { .. }) {
                 0
             } else {
@@ -529,22 +440,25 @@ impl<'a> FootSearch<'a> {
             if visited.contains(&child) {
                 continue;
             }
-            if let Some(check) = self.check
-                && !check.check(
-                    &top.stance,
-                    self.route[top.stance.k],
-                    &step,
-                    &child,
-                    self.route[child.k],
-                )
+            if !self.forbidden.is_empty()
+                && self
+                    .forbidden
+                    .contains(&(top.stance.clone(), child.clone()))
             {
-                // A refused move costs the budget as an expanded node does.
-                stall += 1;
-                if stall > self.params.stall_nodes {
-                    break;
+                continue;
+            }
+            if !self.move_ok(&top.stance, &top.poses, &step) {
+                // Refused moves cost the budget too, a quarter of a node each.
+                refusals += 1;
+                if refusals.is_multiple_of(4) {
+                    stall += 1;
+                    if stall > self.params.stall_nodes {
+                        break;
+                    }
                 }
                 continue;
             }
+            top.entered[group] += 1;
             visited.insert(child.clone());
             nodes += 1;
             path.push(step);
@@ -566,8 +480,15 @@ impl<'a> FootSearch<'a> {
                     break;
                 }
             }
+            let Some(poses) = self.poses(&child) else {
+                path.pop();
+                continue;
+            };
+            let moves = self.moves(&child);
             stack.push(Frame {
-                moves: self.moves(&child),
+                entered: vec![0; moves.caps.len()],
+                moves,
+                poses,
                 stance: child,
                 next: 0,
                 since_advance: since,
@@ -581,16 +502,13 @@ impl<'a> FootSearch<'a> {
     }
 
     /// A stance at the route's first cell: each leg on the valid foothold nearest the middle
-    /// of its range that agrees in height with the others; `None` if that does not hold the
-    /// CG.
+    /// of its range that agrees in height with the others and keeps clear of their legs, the
+    /// body at a height every foot reaches; `None` if that does not hold the CG.
     pub fn initial_stance(&self) -> Option<Stance> {
         let robot = self.space.robot();
         let cg = self.route[0];
         let table = &robot.headings[usize::from(cg.it)];
-        let mut s = Stance {
-            k: 0,
-            feet: vec![None; robot.leg_count()],
-        };
+        let mut feet: Vec<Option<FootCell>> = vec![None; robot.leg_count()];
         for (leg, cells) in table.legs.iter().enumerate() {
             let n = cells.len().max(1) as f64;
             let (mx, my) = cells.iter().fold((0.0, 0.0), |(x, y), c| {
@@ -605,24 +523,81 @@ impl<'a> FootSearch<'a> {
             for c in order {
                 let f = (cg.ix + c.di, cg.iy + c.dj);
                 if self.space.foot().valid(f.0, f.1)
-                    && !s.feet.contains(&Some(f))
-                    && self.heights(0, &s.feet, None, Some((leg, f))).is_some()
+                    && !feet.contains(&Some(f))
+                    && self.heights(0, &feet, None, Some((leg, f))).is_some()
                 {
-                    s.feet[leg] = Some(f);
-                    break;
+                    let mut with = feet.clone();
+                    with[leg] = Some(f);
+                    if self.stance_at_some_height(0, &with).is_some() {
+                        feet = with;
+                        break;
+                    }
                 }
             }
         }
-        self.stable(0, &s.feet, None).then_some(s)
+        self.stance_at_some_height(0, &feet)
+            .filter(|s| self.holds(s, None))
     }
 
-    /// The body-height interval for a stance (`None` if a foot is out of range).
-    pub fn stance_heights(&self, s: &Stance) -> Option<(f64, f64)> {
-        self.heights(s.k, &s.feet, None, None)
+    /// The standing feet at route cell `k` with the body at the first of the preferred
+    /// heights at which every leg can stand clear of the others.
+    fn stance_at_some_height(&self, k: usize, feet: &[Option<FootCell>]) -> Option<Stance> {
+        let (lo, hi) = self.heights(k, feet, None, None)?;
+        self.preferred_heights(lo, hi).into_iter().find_map(|z| {
+            let s = Stance::new(k, feet.to_vec(), millimetres(z));
+            self.poses(&s).filter(|p| self.legs_clear(&s, p)).map(|_| s)
+        })
     }
 
-    /// Whether a stance holds the CG with the margin.
-    pub fn stance_stable(&self, s: &Stance) -> bool {
-        self.stable(s.k, &s.feet, None)
+    /// The body-height interval at route cell `k` for the standing feet (`skip`: a foot
+    /// to leave out, `extra`: a foot to add) from the range maps; `None` if a foot is out of
+    /// range or the interval is empty.
+    pub(crate) fn heights(
+        &self,
+        k: usize,
+        feet: &[Option<FootCell>],
+        skip: Option<usize>,
+        extra: Option<(usize, FootCell)>,
+    ) -> Option<(f64, f64)> {
+        let (mut lo, mut hi) = (self.min_h[k], f64::INFINITY);
+        let standing = feet
+            .iter()
+            .enumerate()
+            .filter(|(l, _)| Some(*l) != skip && extra.is_none_or(|(e, _)| e != *l))
+            .filter_map(|(l, f)| f.map(|f| (l, f)))
+            .chain(extra);
+        for (l, f) in standing {
+            let (a, b) = self.foot_heights(l, k, f)?;
+            lo = lo.max(a);
+            hi = hi.min(b);
+        }
+        (lo <= hi).then_some((lo, hi))
+    }
+
+    /// The body heights (world Z of the origin) at route cell `k` at which leg `leg`'s
+    /// foot on cell `f` stays within its range map's heights.
+    pub(crate) fn foot_heights(&self, leg: usize, k: usize, f: FootCell) -> Option<(f64, f64)> {
+        let (z_lo, z_hi, _) = self.range(leg, k, f)?;
+        let g = self.space.foot().height(f.0, f.1)?;
+        Some(crate::validity::foot_interval(
+            g,
+            self.space.robot().foot_radius[leg],
+            z_lo,
+            z_hi,
+        ))
+    }
+
+    /// The body heights tried within `lo..hi`, best first: high in the interval (the feet
+    /// then have room to rise over the ground between footholds), then lower.
+    pub(crate) fn preferred_heights(&self, lo: f64, hi: f64) -> Vec<f64> {
+        if !hi.is_finite() {
+            return vec![lo];
+        }
+        let mut out: Vec<f64> = [0.7, 0.45, 0.9, 0.2]
+            .iter()
+            .map(|b| lo + b * (hi - lo))
+            .collect();
+        out.dedup_by(|a, b| (*a - *b).abs() < 0.005);
+        out
     }
 }

@@ -36,9 +36,12 @@
 pub mod astar;
 pub mod distribute;
 pub mod error;
+pub mod footcheck;
 pub mod footmap;
+pub mod footmoves;
 pub mod footplan;
 pub mod grid;
+pub mod legs;
 pub mod picture;
 pub mod planner;
 pub mod robot;
@@ -54,14 +57,16 @@ pub use distribute::{
 pub use error::CgError;
 pub use footmap::FootMap;
 pub use footplan::{
-    FootCell, FootPlan, FootSearch, FootStep, MoveCheck, SearchParams, Stance, apply as apply_step,
+    FootCell, FootPlan, FootSearch, FootStep, Held, MoveCheck, SearchCounts, SearchParams, Stance,
+    apply as apply_step, millimetres,
 };
 pub use grid::{CgCell, CgGrid};
+pub use legs::{BodyPose, LegPose, Legs};
 pub use picture::{
     Layout, PictureError, PictureOptions, draw_cg_space, footfalls, stances, start_stance,
     write_cg_space_png,
 };
-pub use planner::{Plan, PlanParams, plan, plan_checked};
+pub use planner::{Plan, PlanParams, Standing, plan, plan_checked};
 pub use robot::{CgParams, CgRobot};
 pub use route::{Flood, Route, RouteParams, flood, plan_route, roadmap};
 pub use space::{CgSpace, REGION_CELLS};

@@ -387,7 +387,7 @@ pub fn start_stance(plan: &Plan) -> Stance {
             *done = true;
         }
     }
-    Stance { k: 0, feet }
+    Stance::new(0, feet, plan.feet.start.z_mm)
 }
 
 /// The stances along a plan, from [`start_stance`], one after each move.

@@ -7,7 +7,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::CgError;
 use crate::footplan::{
-    FootCell, FootPlan, FootSearch, FootStep, MoveCheck, SearchParams, Stance, apply,
+    FootCell, FootPlan, FootSearch, FootStep, MoveCheck, SearchCounts, SearchFailure, SearchParams,
+    Stance, apply, millimetres,
 };
 use crate::grid::CgCell;
 use crate::route::{Route, RouteParams, plan_route};
@@ -33,8 +34,8 @@ impl Default for PlanParams {
         PlanParams {
             route: RouteParams::default(),
             search: SearchParams::default(),
-            max_replans: 30,
-            mark_radius: 0,
+            max_replans: 60,
+            mark_radius: 2,
         }
     }
 }
@@ -50,18 +51,29 @@ pub struct Plan {
     pub marked: Vec<CgCell>,
     /// Routes planned in all.
     pub routes: usize,
+    /// What the foot-level searches counted, over every route.
+    pub counts: SearchCounts,
 }
 
-/// Plans from a start pose to a goal pose. `feet` is where each foot stands at the start
-/// (world X, Y; `None` for a foot in the air); without it, a stance is chosen.
+/// Where the robot stands when a plan starts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Standing {
+    /// Each foot's world X, Y (`None` for a foot in the air).
+    pub feet: Vec<Option<Point2<f64>>>,
+    /// World Z of the body origin, metres.
+    pub body_z: f64,
+}
+
+/// Plans from a start pose to a goal pose. `standing` is where each foot stands at the
+/// start and how high the body is; without it, a stance is chosen.
 pub fn plan(
     space: &mut CgSpace,
     start: (Point2<f64>, f64),
     goal: (Point2<f64>, f64),
-    feet: Option<&[Option<Point2<f64>>]>,
+    standing: Option<&Standing>,
     params: &PlanParams,
 ) -> Result<Plan, CgError> {
-    plan_checked(space, start, goal, feet, params, None)
+    plan_checked(space, start, goal, standing, params, None)
 }
 
 /// [`plan`] with every move the foot-level search considers also put to `check` (see
@@ -70,7 +82,7 @@ pub fn plan_checked(
     space: &mut CgSpace,
     start: (Point2<f64>, f64),
     goal: (Point2<f64>, f64),
-    feet: Option<&[Option<Point2<f64>>]>,
+    standing: Option<&Standing>,
     params: &PlanParams,
     check: Option<&dyn MoveCheck>,
 ) -> Result<Plan, CgError> {
@@ -97,17 +109,24 @@ pub fn plan_checked(
     let mut routes = 1;
     // The steps kept from the last search, and the stance they lead to.
     let mut kept: Vec<FootStep> = Vec::new();
-    let mut stance: Option<Stance> = feet.map(|f| Stance {
-        k: 0,
-        feet: f
-            .iter()
-            .map(|p| p.map(|p| grid.xy_of(p)))
-            .collect::<Vec<Option<FootCell>>>(),
+    let mut stance: Option<Stance> = standing.map(|st| {
+        Stance::new(
+            0,
+            st.feet
+                .iter()
+                .map(|p| p.map(|p| grid.xy_of(p)))
+                .collect::<Vec<Option<FootCell>>>(),
+            millimetres(st.body_z),
+        )
     });
+    let mut counts = SearchCounts::default();
     let initial = stance.clone();
     let mut first_stance: Option<Stance> = initial.clone();
     loop {
-        let search = FootSearch::new(space, &route, params.search.clone()).with_check(check);
+        let mut search = FootSearch::new(space, &route, params.search.clone());
+        if let Some(st) = standing {
+            search = search.with_start(start, &st.feet);
+        }
         let from = match &stance {
             Some(s) => s.clone(),
             None => search
@@ -119,7 +138,9 @@ pub fn plan_checked(
         };
         // The stance the whole plan starts from: the given one, else the first chosen.
         let first = first_stance.get_or_insert_with(|| from.clone()).clone();
-        match search.search(from.clone()) {
+        let searched = search_checked(&mut search, &from, check, &route);
+        counts.add(&search.counts());
+        match searched {
             Ok(mut found) => {
                 let mut steps = kept.clone();
                 steps.append(&mut found.steps);
@@ -129,7 +150,7 @@ pub fn plan_checked(
                         route,
                         start: Stance {
                             k: 0,
-                            feet: initial_stance.feet,
+                            ..initial_stance
                         },
                         steps,
                         nodes: found.nodes,
@@ -137,9 +158,16 @@ pub fn plan_checked(
                     first_route,
                     marked,
                     routes,
+                    counts,
                 });
             }
-            Err(fail) => {
+            Err(Failed::Refused(n)) => {
+                return Err(CgError::NoFootfalls {
+                    replans: marked.len(),
+                    detail: format!("the moves' check refused {n} moves of the plans found"),
+                });
+            }
+            Err(Failed::Stuck(fail)) => {
                 if marked.len() >= params.max_replans {
                     return Err(CgError::NoFootfalls {
                         replans: marked.len(),
@@ -156,6 +184,13 @@ pub fn plan_checked(
                         detail: "the search failed at the goal".into(),
                     });
                 };
+                // Where the goal's cell cannot be stepped into from the cell before it, that
+                // cell is marked instead: the next route comes to the goal from elsewhere.
+                let bad = if bad == g && fail.furthest > 0 {
+                    route[fail.furthest]
+                } else {
+                    bad
+                };
                 if bad == g {
                     return Err(CgError::NoFootfalls {
                         replans: marked.len(),
@@ -171,9 +206,14 @@ pub fn plan_checked(
                 for dy in -r..=r {
                     for dx in -r..=r {
                         let c = CgCell::new(bad.ix + dx, bad.iy + dy, bad.it);
-                        // The cells the route has already passed stay usable.
+                        // The cells the route has already passed, the goal and the cells
+                        // beside it stay usable (marking those would wall the goal in).
+                        let by_goal =
+                            c.it == g.it && (c.ix - g.ix).abs() <= 1 && (c.iy - g.iy).abs() <= 1;
                         if c == bad
-                            || (space.grid().contains(c) && !route[..=fail.furthest].contains(&c))
+                            || (!by_goal
+                                && space.grid().contains(c)
+                                && !route[..=fail.furthest].contains(&c))
                         {
                             space.mark_invalid(c);
                         }
@@ -211,6 +251,56 @@ pub fn plan_checked(
                     }
                     Err(e) => return Err(e),
                 }
+            }
+        }
+    }
+}
+
+/// Plans the search found that the moves' check refused, at most, before the planner gives
+/// up on a route.
+const MAX_REFUSED: usize = 400;
+
+/// How a checked search failed.
+enum Failed {
+    /// The search got stuck.
+    Stuck(SearchFailure),
+    /// The check refused this many moves of the plans found.
+    Refused(usize),
+}
+
+/// Searches from `from`, and puts each plan found to `check` move by move; at the first move
+/// it refuses, forbids that move from its stance and searches again.
+fn search_checked(
+    search: &mut FootSearch<'_>,
+    from: &Stance,
+    check: Option<&dyn MoveCheck>,
+    route: &[CgCell],
+) -> Result<FootPlan, Failed> {
+    let mut refused = 0;
+    loop {
+        let found = search.search(from.clone()).map_err(Failed::Stuck)?;
+        let Some(check) = check else {
+            return Ok(found);
+        };
+        let mut at = from.clone();
+        let mut bad = None;
+        for step in &found.steps {
+            let mut next = at.clone();
+            apply(&mut next, step);
+            if !check.check(&at, route[at.k], step, &next, route[next.k]) {
+                bad = Some(next);
+                break;
+            }
+            at = next;
+        }
+        match bad {
+            None => return Ok(found),
+            Some(next) => {
+                refused += 1;
+                if refused > MAX_REFUSED {
+                    return Err(Failed::Refused(refused));
+                }
+                search.forbid(at, next);
             }
         }
     }

@@ -4,6 +4,7 @@
 
 use std::collections::HashSet;
 use std::f64::consts::TAU;
+use std::sync::Arc;
 
 use nalgebra::{Point2, Vector2};
 use tca_legged_model::{RobotModel, Shape};
@@ -168,6 +169,12 @@ pub struct CgParams {
     /// whose neighbours are not all reached), so that every foot cell in range can be
     /// reached at its centre.
     pub conservative_ranges: bool,
+    /// Room the foot-level search keeps between the links of different legs (each link's
+    /// capsules widened by this), metres; `None`: a thirtieth of a cell.
+    pub leg_clearance_m: Option<f64>,
+    /// How far above the higher of its two ends a swinging foot must be able to rise,
+    /// metres; `None`: a third of a cell.
+    pub swing_rise_m: Option<f64>,
 }
 
 impl Default for CgParams {
@@ -179,6 +186,8 @@ impl Default for CgParams {
             clearance_m: 0.05,
             stability_margin_m: None,
             conservative_ranges: true,
+            leg_clearance_m: None,
+            swing_rise_m: None,
         }
     }
 }
@@ -186,6 +195,9 @@ impl Default for CgParams {
 /// A robot as CG-space sees it, tabulated for one CG cell size.
 #[derive(Debug, Clone)]
 pub struct CgRobot {
+    /// The robot itself: the foot-level search checks its moves on its legs' kinematics,
+    /// links and masses.
+    pub model: Arc<RobotModel>,
     /// The robot's name.
     pub name: String,
     /// Leg names, in the model's order.
@@ -207,6 +219,10 @@ pub struct CgRobot {
     pub params: CgParams,
     /// The stability margin used by the foot-level search, metres.
     pub stability_margin_m: f64,
+    /// Room kept between the links of different legs, metres.
+    pub leg_clearance_m: f64,
+    /// How far a swinging foot must be able to rise above its ends, metres.
+    pub swing_rise_m: f64,
 }
 
 impl CgRobot {
@@ -336,7 +352,10 @@ impl CgRobot {
             }
         }
         let stability_margin_m = params.stability_margin_m.unwrap_or(cell_m / 5.0);
+        let leg_clearance_m = params.leg_clearance_m.unwrap_or(cell_m / 30.0).max(0.0);
+        let swing_rise_m = params.swing_rise_m.unwrap_or(cell_m / 3.0).max(0.0);
         let mut robot = CgRobot {
+            model: Arc::new(model.clone()),
             name: model.name().to_string(),
             leg_names: legs.iter().map(|l| l.name().to_string()).collect(),
             foot_radius,
@@ -347,6 +366,8 @@ impl CgRobot {
             under,
             params: params.clone(),
             stability_margin_m,
+            leg_clearance_m,
+            swing_rise_m,
         };
         let bins = match params.theta_bins {
             Some(0) => {

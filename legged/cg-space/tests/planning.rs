@@ -162,7 +162,11 @@ fn straddled_patch_leaves_cg_cells_valid_and_a_large_region_grows_a_border() {
 
 #[test]
 fn cliff_is_invalid_and_the_route_takes_the_ramp() {
-    let t = common::cliff(2.5);
+    // The walking course's cliff: its ramp is wide enough for the Ambler to stand on with
+    // every leg clear of the others (the search checks the legs' links against each other).
+    let t = tca_legged_courses::Course::builtin("cliff", 1)
+        .expect("the cliff course")
+        .terrain;
     let mut space = ambler_space(&t);
     let grid = *space.grid();
     // Standing across the cliff face is impossible: feet at the base and on top.

@@ -26,7 +26,7 @@ use std::time::Instant;
 use nalgebra::{Isometry3, Point2, Translation3, UnitQuaternion};
 use tca_cg_space::{
     CgCell, CgError, CgGrid, CgParams, CgSpace, FootStep, MoveCheck, Plan, PlanParams, Stance,
-    apply_step, plan_checked,
+    Standing, apply_step, millimetres, plan_checked,
 };
 use tca_free_gait::terrain::GridView;
 use tca_free_gait::{FreeGait, GaitParams, GaitState, StepPlan};
@@ -38,9 +38,6 @@ use tca_robot::HeightField;
 const BODY_MATCH: f64 = 0.05;
 /// See [`BODY_MATCH`].
 const FOOT_MATCH: f64 = 0.1;
-/// Body heights tried for an advance, as multiples of a tenth of the standing height
-/// about the planner's height.
-const HEIGHT_TRIES: [f64; 7] = [0.0, -0.5, 0.5, -1.0, 1.0, -1.5, 1.5];
 
 /// The CG-space layout for walking: one heading bin, so that the robot keeps its heading
 /// (the paper allows one bin, "no rotation"): with eight, a route may turn the body a whole
@@ -61,7 +58,6 @@ pub struct CgSteps {
     space: Mutex<CgSpace>,
     params: PlanParams,
     lift_m: f64,
-    stand_m: f64,
     /// The plan's steps still to come, each with the state it starts from.
     queue: Mutex<VecDeque<(GaitState, StepPlan)>>,
 }
@@ -98,10 +94,10 @@ pub struct CgPlanned {
 }
 
 impl CgSteps {
-    /// A step source for `model` on `terrain`: the CG-space with `cg` (its stability margin
-    /// raised to the free gait's, plus an allowance for the legs' share of the centre of
-    /// mass, unless given), planned with `params`, the moves checked with the free gait's
-    /// `gait` parameters.
+    /// A step source for `model` on `terrain`: the CG-space with `cg` (unless given, its
+    /// stability margin half as much again as the free gait's, its leg clearance the free
+    /// gait's and a swing's rise the free gait's travel height over a swing's ends),
+    /// planned with `params`, the moves checked with the free gait's `gait` parameters.
     pub fn new(
         model: Arc<RobotModel>,
         terrain: Arc<HeightField>,
@@ -112,27 +108,24 @@ impl CgSteps {
         if cg.stability_margin_m.is_none() {
             cg.stability_margin_m = Some(1.5 * gait.min_margin_m);
         }
+        cg.leg_clearance_m.get_or_insert(gait.leg_clearance_m);
+        cg.swing_rise_m.get_or_insert(2.0 * gait.clearance_m);
         let space = CgSpace::for_model(&model, &terrain, cg).map_err(|e| e.to_string())?;
-        // The real robot refuses some of the moves CG-space allows (its legs' links meet):
-        // more footholds per reason give the search others to try.
         let mut params = params;
-        params.search.candidates = params.search.candidates.max(8);
-        // Refusals count against the stall budget: a smaller budget hands a cell the robot
-        // cannot get past back to the route planner sooner.
+        // A smaller budget hands a cell the robot cannot get past back to the route planner
+        // sooner.
         params.search.stall_nodes = params.search.stall_nodes.min(1_000);
         // Where the robot cannot get past a cell, its neighbours are usually no better (the
         // edge of a ramp): the next route keeps two cells further off.
         params.mark_radius = params.mark_radius.max(2);
         params.max_replans = params.max_replans.max(60);
         let lift_m = 3.0 * gait.clearance_m;
-        let stand_m = model.neutral_height();
         Ok(CgSteps {
             gait: FreeGait::new(model, gait),
             view: GridView::new(terrain),
             space: Mutex::new(space),
             params,
             lift_m,
-            stand_m,
             queue: Mutex::new(VecDeque::new()),
         })
     }
@@ -204,16 +197,19 @@ impl CgSteps {
                 "with one heading bin the CG-space plans for a robot facing +X (yaw 0), and this one faces {yaw:.2} rad; start it facing +X or plan with more heading bins"
             ));
         }
-        let feet: Vec<Option<Point2<f64>>> = state
-            .legs
-            .iter()
-            .map(|l| l.stance.then(|| Point2::new(l.foot.x, l.foot.y)))
-            .collect();
+        let standing = Standing {
+            feet: state
+                .legs
+                .iter()
+                .map(|l| l.stance.then(|| Point2::new(l.foot.x, l.foot.y)))
+                .collect(),
+            body_z: t.z,
+        };
         plan_checked(
             space,
             (Point2::new(t.x, t.y), yaw),
             (goal, yaw),
-            Some(&feet),
+            Some(&standing),
             &self.params,
             Some(executor),
         )
@@ -223,8 +219,8 @@ impl CgSteps {
         })
     }
 
-    /// The body's move to a CG cell at the planner's height, or the nearest height to it at
-    /// which the move can be carried out.
+    /// The body's move to a CG cell at the planner's height (to the millimetre the search
+    /// holds it at).
     fn advance(
         &self,
         at: &GaitState,
@@ -234,23 +230,11 @@ impl CgSteps {
     ) -> Result<StepPlan, String> {
         let c = grid.centre(to.ix, to.iy);
         let rotation = UnitQuaternion::from_euler_angles(0.0, 0.0, grid.theta(to.it));
-        let mut first = None;
-        for k in HEIGHT_TRIES {
-            let z = body_z + k * 0.1 * self.stand_m;
-            let target = Isometry3::from_parts(Translation3::new(c.x, c.y, z), rotation);
-            match self.gait.move_body_to(at, &self.view, &target) {
-                Ok(p) => return Ok(p),
-                Err(e) => {
-                    first.get_or_insert(e);
-                }
-            }
-        }
-        Err(format!(
-            "the body's move to ({:.2}, {:.2}): {}",
-            c.x,
-            c.y,
-            first.unwrap_or_default()
-        ))
+        let z = f64::from(millimetres(body_z)) / 1000.0;
+        let target = Isometry3::from_parts(Translation3::new(c.x, c.y, z), rotation);
+        self.gait
+            .move_body_to(at, &self.view, &target)
+            .map_err(|e| format!("the body's move to ({:.2}, {:.2}): {e}", c.x, c.y))
     }
 
     fn summary(&self, space: &CgSpace, found: &Plan, refused_moves: usize) -> CgPlanned {
@@ -325,17 +309,15 @@ impl<'a> Executor<'a> {
         let yaw = state.body.rotation.euler_angles().2;
         let mut states = HashMap::new();
         if let Some(cell) = grid.cell_of(Point2::new(t.x, t.y), yaw) {
-            let start = Stance {
-                k: 0,
-                feet: state
-                    .legs
-                    .iter()
-                    .map(|l| {
-                        l.stance
-                            .then(|| grid.xy_of(Point2::new(l.foot.x, l.foot.y)))
-                    })
-                    .collect(),
-            };
+            let feet = state
+                .legs
+                .iter()
+                .map(|l| {
+                    l.stance
+                        .then(|| grid.xy_of(Point2::new(l.foot.x, l.foot.y)))
+                })
+                .collect();
+            let start = Stance::new(0, feet, millimetres(t.z));
             states.insert((cell, start), (state.clone(), None));
         }
         Executor {
@@ -428,7 +410,7 @@ impl MoveCheck for Executor<'_> {
                 true
             }
             Err(why) => {
-                tracing::trace!(?step, %why, "a move the robot cannot carry out");
+                tracing::trace!(?step, %why, feet = ?state.legs.iter().map(|l| (l.stance, (l.foot.x * 100.0).round() / 100.0, (l.foot.y * 100.0).round() / 100.0, (l.foot.z * 100.0).round() / 100.0)).collect::<Vec<_>>(), body = ?state.body.translation.vector, "a move the robot cannot carry out");
                 self.refused.set(self.refused.get() + 1);
                 false
             }
