@@ -213,6 +213,8 @@ impl LogWriter {
 
 enum SinkInput {
     Records(Vec<LogRecord>),
+    /// Write and flush what came before, then say so.
+    Flush(mpsc::Sender<()>),
     Finish,
 }
 
@@ -264,6 +266,14 @@ impl LogSink {
             self.backlog.fetch_sub(count, Ordering::Relaxed);
             tracing::error!("log writer thread has stopped; traffic is no longer logged");
         }
+    }
+
+    /// Asks the writer thread to write and flush to the operating system every record queued
+    /// so far; the receiver gets `()` once it has (or is dropped if the thread has stopped).
+    pub fn flush(&mut self) -> mpsc::Receiver<()> {
+        let (tx, rx) = mpsc::channel();
+        let _ = self.tx.send(SinkInput::Flush(tx));
+        rx
     }
 
     /// Writes what is queued, the summary, and closes the file.
@@ -318,6 +328,12 @@ fn run_sink(
                     }
                     backlog.fetch_sub(records.len(), Ordering::Relaxed);
                     dirty = true;
+                }
+                SinkInput::Flush(done) => {
+                    writer.flush()?;
+                    dirty = false;
+                    last_flush = Instant::now();
+                    let _ = done.send(());
                 }
                 SinkInput::Finish => finishing = true,
             }
