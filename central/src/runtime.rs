@@ -251,6 +251,19 @@ impl RunningCentral {
         Ok(stats)
     }
 
+    /// Stops central the way a crash (`kill -9`) would, for tests of recovery: the driver stops
+    /// where it is, every link drops, and nothing is cleaned up: the journal stays, for a
+    /// central started on it to restore. (Unlike a real crash, the traffic log's writer still
+    /// writes what it was handed.)
+    pub async fn crash(self) {
+        self.task.abort();
+        let _ = self.task.await;
+        drop(self.local);
+        if let Some(z) = self.zenoh {
+            z.close().await;
+        }
+    }
+
     /// Waits until central stops by itself (it does not, unless the runtime fails).
     pub async fn wait(self) -> Result<Stats> {
         self.task.await.map_err(|_| CentralError::Stopped)?
