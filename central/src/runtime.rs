@@ -351,18 +351,42 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
             options.config.max_outbox_bytes,
         ),
     };
+    // A restored central's journal gets its new head first, carrying the records its log is
+    // to start with (what the crashed central's log lacks, its links closing): a crash from
+    // here on finds them in the journal, whatever reached the log.
+    let mut pending_prefix = Vec::new();
+    let (core, journal, restored) = match recovered {
+        Some(mut r) => {
+            let mut core = r.core;
+            pending_prefix = std::mem::take(&mut r.log_prefix);
+            let journal =
+                r.pending
+                    .start(&mut core, options.log.is_some(), pending_prefix.clone())?;
+            for w in &r.warnings {
+                tracing::warn!(journal = %journal.path().display(), "{w}");
+            }
+            let restored = r.summary.map(|summary| {
+                tracing::info!("{summary}");
+                Restored {
+                    summary,
+                    log_records_recovered: r.recovered,
+                    warnings: r.warnings,
+                }
+            });
+            (core, Some(journal), restored)
+        }
+        None => (Central::new(options.config.clone()), None, None),
+    };
     let mut log = match &options.log {
         Some(path) => Some(LogSink::create(path)?),
         None => None,
     };
-    // A restored central's log starts with what the crashed one's lacks, written before the
-    // journal's new head counts it.
     let mut logged = 0u64;
-    if let (Some(r), Some(sink)) = (&recovered, log.as_mut())
-        && !r.log_prefix.is_empty()
+    if let Some(sink) = log.as_mut()
+        && !pending_prefix.is_empty()
     {
-        logged = r.log_prefix.len() as u64;
-        sink.append_batch(r.log_prefix.clone());
+        logged = pending_prefix.len() as u64;
+        sink.append_batch(pending_prefix);
         flushed(sink.flush()).await;
     }
     let mut local = Vec::new();
@@ -392,27 +416,6 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
     };
     let limits = handle.outbox_limits;
     let max_log_backlog = options.config.max_log_backlog.max(1) as usize;
-    let (core, journal, restored) = match recovered {
-        Some(r) => {
-            let mut core = r.core;
-            let journal = r
-                .pending
-                .start(&mut core, log.is_some().then_some(logged))?;
-            for w in &r.warnings {
-                tracing::warn!(journal = %journal.path().display(), "{w}");
-            }
-            let restored = r.summary.map(|summary| {
-                tracing::info!("{summary}");
-                Restored {
-                    summary,
-                    log_records_recovered: r.recovered,
-                    warnings: r.warnings,
-                }
-            });
-            (core, Some(journal), restored)
-        }
-        None => (Central::new(options.config), None, None),
-    };
     let task = tokio::spawn(drive(
         Driver::new(core, limits, journal, logged),
         max_log_backlog,
@@ -861,7 +864,7 @@ async fn rewrite_journal(d: &mut Driver, log: Option<&mut LogSink>) {
     let Some(journal) = d.journal.as_mut() else {
         return;
     };
-    let result = crate::journal::head(&d.core, journal.id(), logged)
+    let result = crate::journal::head(&d.core, journal.id(), logged, Vec::new())
         .map_err(|reason| reason.to_string())
         .and_then(|head| journal.rewrite(&head).map_err(|e| e.to_string()));
     if let Err(e) = result {

@@ -16,7 +16,7 @@ pub enum Direction {
 }
 
 /// One log record with central's time.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LogRecord {
     /// When central handled it: nanoseconds since the UNIX epoch.
     pub at_ns: u64,
@@ -25,7 +25,7 @@ pub struct LogRecord {
 }
 
 /// What a record holds.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum RecordKind {
     /// A frame that passed through central.
     Frame(FrameRecord),

@@ -259,6 +259,7 @@ fn entries(bytes: &[u8]) -> Vec<JournalEntry> {
         id: 0,
         config: CentralConfig::default(),
         log_records: None,
+        log_prefix: Vec::new(),
         state: Vec::new(),
     };
     format::append_record(&mut file, &head).unwrap();

@@ -31,9 +31,14 @@ pub struct Head {
     /// The configuration central ran with (the policy is not kept: what it made of each hello
     /// is in the entries).
     pub config: CentralConfig,
-    /// How many records central had handed to its traffic log when the state was saved (all of
-    /// them written by then); `None` without a log.
+    /// How many records the traffic log held before `log_prefix` when the state was saved (all
+    /// of them written by then); `None` without a log.
     pub log_records: Option<u64>,
+    /// Records that follow those `log_records` in the traffic log, written (or being written)
+    /// after this head: a restarted central's first head carries what it puts at the start of
+    /// its new log (the crashed central's last moments, its links closing), so that a crash
+    /// before they are all written loses none of them; empty in later heads.
+    pub log_prefix: Vec<tca_logs::LogRecord>,
     /// The saved state ([`Central::save`](crate::Central::save)).
     pub state: Vec<u8>,
 }

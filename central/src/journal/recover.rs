@@ -36,13 +36,21 @@ pub(crate) struct Pending {
 }
 
 impl Pending {
-    /// Writes the core's state as the journal's head (the traffic log having written
-    /// `log_records` records, or `None` without a log), turns journaling on, and returns the
-    /// journal.
-    pub(crate) fn start(self, core: &mut Central, log_records: Option<u64>) -> Result<Journal> {
-        let head = head(core, self.id, log_records).map_err(|reason| JournalError::Restore {
-            path: self.path.clone(),
-            reason,
+    /// Writes the core's state as the journal's head, turns journaling on, and returns the
+    /// journal. With a traffic log (`logging`), the head says that `log_prefix` follows at the
+    /// start of the new log: written after the head, so that a crash before they are all in
+    /// the log loses none of them.
+    pub(crate) fn start(
+        self,
+        core: &mut Central,
+        logging: bool,
+        log_prefix: Vec<LogRecord>,
+    ) -> Result<Journal> {
+        let head = head(core, self.id, logging.then_some(0), log_prefix).map_err(|reason| {
+            JournalError::Restore {
+                path: self.path.clone(),
+                reason,
+            }
         })?;
         let journal = Journal::create(&self.path, &head, self.lock)?;
         core.record_journal(self.id);
@@ -50,13 +58,20 @@ impl Pending {
     }
 }
 
-/// The head for the core's state now.
-pub(crate) fn head(core: &Central, id: u64, log_records: Option<u64>) -> Result<Head, String> {
+/// The head for the core's state now, the traffic log holding `log_records` records (`None`
+/// without a log) to be followed by `log_prefix`.
+pub(crate) fn head(
+    core: &Central,
+    id: u64,
+    log_records: Option<u64>,
+    log_prefix: Vec<LogRecord>,
+) -> Result<Head, String> {
     Ok(Head {
         version: env!("CARGO_PKG_VERSION").to_owned(),
         id,
         config: core.config().clone(),
         log_records,
+        log_prefix,
         state: core
             .save()
             .map_err(|e| format!("central's state does not save: {e}"))?,
@@ -156,10 +171,12 @@ pub(crate) fn open(
         .collect();
     let mut warnings = Vec::new();
     let mut log_prefix = if logging {
+        let mut expected = contents.head.log_prefix;
+        expected.extend(replayed);
         missing_records(
             contents.head.log_records,
             previous_log,
-            replayed,
+            expected,
             &mut warnings,
         )
     } else {
@@ -196,50 +213,57 @@ pub(crate) fn open(
     })
 }
 
-/// The records the replay logged (`replayed`, which follow the `head_records` the crashed
-/// log held when the head was written) that the crashed log `previous` lacks, checked against
-/// those it has.
+/// The records the crashed central logged or was to log after the `head_records` its log
+/// held when its head was written (`expected`: the head's prefix, then what the replay logged)
+/// that the crashed log `previous` lacks, checked against those it has. A log that was never
+/// written (not found) holds none.
 fn missing_records(
     head_records: Option<u64>,
     previous: Option<&Path>,
-    replayed: Vec<LogRecord>,
+    expected: Vec<LogRecord>,
     warnings: &mut Vec<String>,
 ) -> Vec<LogRecord> {
-    let (Some(k), Some(previous)) = (head_records, previous) else {
-        if head_records.is_some() && !replayed.is_empty() {
-            warnings.push(format!(
-                "the crashed central kept a traffic log, but it was not found where this one \
-                 logs: the {} records of its last moments that the journal holds are not \
-                 written again",
-                replayed.len()
-            ));
-        }
+    let Some(k) = head_records else {
         return Vec::new();
     };
-    let log = match LogFile::open(previous) {
-        Ok(log) => log,
-        Err(e) => {
-            warnings.push(format!(
-                "the crashed central's log {} cannot be read ({e}): the records of its last \
-                 moments are not written again",
-                previous.display()
-            ));
+    let k = k as usize;
+    let held: Vec<LogRecord> = match previous {
+        None if k == 0 => Vec::new(),
+        None => {
+            if !expected.is_empty() {
+                warnings.push(format!(
+                    "the crashed central kept a traffic log, but it was not found where this \
+                     one logs: the {} records of its last moments that the journal holds are \
+                     not written again",
+                    expected.len()
+                ));
+            }
             return Vec::new();
         }
+        Some(previous) => match LogFile::open(previous) {
+            Ok(log) => log.records,
+            Err(e) => {
+                warnings.push(format!(
+                    "the crashed central's log {} cannot be read ({e}): the records of its \
+                     last moments are not written again",
+                    previous.display()
+                ));
+                return Vec::new();
+            }
+        },
     };
-    let k = k as usize;
-    let held = log.records.len();
-    let fits = held >= k && held <= k + replayed.len() && log.records[k..] == replayed[..held - k];
+    let n = held.len();
+    let fits = n >= k && n <= k + expected.len() && held[k..] == expected[..n - k];
     if !fits {
         warnings.push(format!(
-            "the crashed central's log {} does not match its journal ({held} records, the \
-             journal's state follows record {k} and its events logged {} more): it is another \
+            "the crashed central's log {} does not match its journal ({n} records, the \
+             journal's state follows record {k} and {} more were to follow): it is another \
              central's, or was changed; the records of the crashed central's last moments are \
              not written again",
-            previous.display(),
-            replayed.len()
+            previous.map_or_else(|| "(none)".into(), |p| p.display().to_string()),
+            expected.len()
         ));
         return Vec::new();
     }
-    replayed.into_iter().skip(held - k).collect()
+    expected.into_iter().skip(n - k).collect()
 }
