@@ -40,13 +40,20 @@ pub enum JournaledEvent {
     /// [`Event::Opened`].
     Opened(LinkId),
     /// [`Event::Frame`] (a hello's secret blanked).
-    Frame(LinkId, #[serde(with = "bytes_serde")] Bytes),
+    Frame(
+        LinkId,
+        #[serde(with = "tca_logs::record::bytes_serde")] Bytes,
+    ),
     /// [`Event::Closed`].
     Closed(LinkId),
     /// [`Event::Tick`].
     Tick,
     /// [`Event::InboxFull`]: the frame and the inbox's frames and bytes.
-    InboxFull(LinkId, #[serde(with = "bytes_serde")] Bytes, (u64, u64)),
+    InboxFull(
+        LinkId,
+        #[serde(with = "tca_logs::record::bytes_serde")] Bytes,
+        (u64, u64),
+    ),
     /// [`Event::InboxDropped`].
     InboxDropped(LinkId, u64),
     /// [`Event::OutboxLevel`]: the outbox's frames and bytes.
@@ -384,33 +391,6 @@ impl Central {
         if let Err(e) = crate::journal::format::append_record(&mut self.journal.entries, &entry) {
             tracing::error!(error = %e, "an event could not be journaled");
         }
-    }
-}
-
-/// `Bytes` as a byte string.
-mod bytes_serde {
-    use bytes::Bytes;
-    use serde::{Deserializer, Serializer};
-
-    pub(super) fn serialize<S: Serializer>(v: &Bytes, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_bytes(v)
-    }
-
-    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Bytes, D::Error> {
-        struct V;
-        impl serde::de::Visitor<'_> for V {
-            type Value = Bytes;
-            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-                f.write_str("a byte string")
-            }
-            fn visit_bytes<E: serde::de::Error>(self, v: &[u8]) -> Result<Bytes, E> {
-                Ok(Bytes::copy_from_slice(v))
-            }
-            fn visit_byte_buf<E: serde::de::Error>(self, v: Vec<u8>) -> Result<Bytes, E> {
-                Ok(Bytes::from(v))
-            }
-        }
-        d.deserialize_byte_buf(V)
     }
 }
 

@@ -169,6 +169,7 @@ mod tests {
             id: 7,
             config: CentralConfig::default(),
             log_records: Some(3),
+            log_prefix: Vec::new(),
             state: vec![1, 2, 3],
         };
         append_record(&mut bytes, &head).unwrap();

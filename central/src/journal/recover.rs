@@ -267,3 +267,46 @@ fn missing_records(
     }
     expected.into_iter().skip(n - k).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::missing_records;
+    use tca_logs::{LinkEvent, LinkRecord, LogRecord, RecordKind};
+
+    fn record(i: u64) -> LogRecord {
+        LogRecord {
+            at_ns: i,
+            kind: RecordKind::Link(LinkRecord {
+                link: i as u32,
+                event: LinkEvent::Closed,
+                module: None,
+                detail: String::new(),
+            }),
+        }
+    }
+
+    #[test]
+    fn a_crashed_log_never_written_lacks_all_that_its_head_announced() {
+        let expected: Vec<LogRecord> = (0..5).map(record).collect();
+        let mut warnings = Vec::new();
+        let missing = missing_records(Some(0), None, expected.clone(), &mut warnings);
+        assert_eq!(missing, expected);
+        assert!(warnings.is_empty(), "{warnings:?}");
+    }
+
+    #[test]
+    fn a_log_missing_after_it_held_records_is_said_and_nothing_is_made_up() {
+        let expected: Vec<LogRecord> = (0..5).map(record).collect();
+        let mut warnings = Vec::new();
+        let missing = missing_records(Some(7), None, expected, &mut warnings);
+        assert!(missing.is_empty());
+        assert!(warnings[0].contains("not found"), "{warnings:?}");
+    }
+
+    #[test]
+    fn without_a_log_nothing_is_missing() {
+        let mut warnings = Vec::new();
+        assert!(missing_records(None, None, vec![record(1)], &mut warnings).is_empty());
+        assert!(warnings.is_empty());
+    }
+}
