@@ -97,3 +97,56 @@ async fn a_module_that_is_not_a_walking_module_cannot_be_a_victim() {
     assert!(!status.success());
     assert!(stderr.contains("not a walking module"), "{stderr}");
 }
+
+/// Central itself killed with SIGKILL twice during a walk, started again at once on its
+/// journal: the walk goes on by itself to its goal (the walker sends it once), and the logs of
+/// the three centrals, audited together, show no message lost, none handled twice, time kept.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_walk_goes_on_through_kills_of_central_on_its_journal() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().to_str().unwrap().to_owned();
+    let (status, stdout, stderr) = run_tca(
+        "tca chaos --kill-central",
+        &[
+            "chaos",
+            "--json",
+            "--out",
+            &out,
+            "--kill-central",
+            "--walks",
+            "1",
+            "--kills",
+            "2",
+            "--seed",
+            "2",
+        ],
+        Duration::from_secs(240),
+    )
+    .await;
+    let report = walk_report(&stdout, &stderr);
+    assert!(status.success(), "{stdout}\n{stderr}");
+    check(&report, 1, 2);
+    for kill in report["kills"].as_array().unwrap() {
+        assert_eq!(kill["module"], "central", "{kill}");
+    }
+    let walks = report["walks"].as_array().unwrap().len() as u64;
+    assert_eq!(report["walk_goals"].as_u64(), Some(walks), "{report}");
+    // Each restart kept the crashed central's log: three logs, audited as one history.
+    let logs: Vec<String> = report["logs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l.as_str().unwrap().to_owned())
+        .collect();
+    assert_eq!(logs.len(), 3, "{report}");
+    let mut args = vec!["log", "audit"];
+    args.extend(logs.iter().map(String::as_str));
+    let (audit_status, audit_out, _) =
+        run_tca("tca log audit", &args, Duration::from_secs(60)).await;
+    assert!(audit_status.success(), "{audit_out}");
+    assert!(
+        audit_out.contains("no message lost, none handled twice"),
+        "{audit_out}"
+    );
+    assert!(audit_out.contains("time kept"), "{audit_out}");
+}

@@ -10,6 +10,8 @@
 //! - [`config`]: limits and defaults ([`CentralConfig`]), including per-module resource limits.
 //! - [`policy`]: the registration policy file: identities, secrets, who may register and send
 //!   what ([`Policy`]).
+//! - [`journal`]: the journal that lets a central restarted after a crash come back whole (task
+//!   trees, queues, the goals handed to modules), and how nothing is done twice.
 //! - [`runtime`]: the async driver that owns the core, feeds it events from every link and
 //!   carries out its actions; [`CentralHandle`] to hand in-process modules their transport
 //!   ([`CentralHandle::in_process`]) and to inspect central. Each link's bounded inbox (served
@@ -23,6 +25,7 @@
 
 pub mod config;
 pub mod core;
+pub mod journal;
 pub mod policy;
 pub mod process;
 pub mod runtime;
@@ -31,7 +34,7 @@ mod zenoh_router;
 pub use config::CentralConfig;
 pub use core::{Action, Central, Event, LinkId};
 pub use policy::{Policy, PolicyError};
-pub use runtime::{CentralHandle, HighWater, RunningCentral, StartOptions, Stats, start};
+pub use runtime::{CentralHandle, HighWater, Restored, RunningCentral, StartOptions, Stats, start};
 pub use tca_link::zenoh::DEFAULT_ENDPOINT;
 
 /// Errors of central's runtime.
@@ -74,6 +77,9 @@ pub enum CentralError {
     /// The policy file could not be loaded.
     #[error(transparent)]
     Policy(#[from] PolicyError),
+    /// The journal could not be opened, restored or started.
+    #[error(transparent)]
+    Journal(#[from] journal::JournalError),
 }
 
 /// Result alias of this crate.

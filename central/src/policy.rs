@@ -215,6 +215,16 @@ impl Grant {
     }
 }
 
+impl Grant {
+    /// A grant as central's journal saved it (identity and permissions).
+    pub(crate) fn restored(identity: String, permissions: Permissions) -> Grant {
+        Grant {
+            identity,
+            permissions: Arc::new(permissions),
+        }
+    }
+}
+
 /// Control messages every connected module may send: the link's bookkeeping, not the task
 /// trees.
 fn always_allowed(name: &str) -> bool {

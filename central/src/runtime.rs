@@ -5,6 +5,10 @@
 //! `tca_link::outbox`), whose level the driver measures when the core asks and reports when a
 //! watched one drains; the core decides what a slow module gets. Nor does it wait for the log
 //! writer: while that is `max_log_backlog` records behind, frames stay in the inboxes.
+//!
+//! With a journal (`crate::journal`), what the core does is carried out once what caused it is
+//! written: the actions of a batch wait, the batch's journal entries are written in one go,
+//! then the actions go out (and what they call for in turn, likewise).
 
 use std::collections::{HashMap, VecDeque};
 use std::path::PathBuf;
@@ -25,6 +29,7 @@ use tca_link::{
 };
 
 use crate::core::{Action, Central, Counters, Event, LinkId, OutboxUse};
+use crate::journal::Journal;
 use crate::zenoh_router::ZenohCentral;
 use crate::{CentralConfig, CentralError, Result};
 
@@ -221,6 +226,19 @@ pub struct RunningCentral {
     task: JoinHandle<Result<Stats>>,
     zenoh: Option<ZenohCentral>,
     local: Vec<LocalListener>,
+    restored: Option<Restored>,
+}
+
+/// What a central started on a journal of a crashed central restored.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Restored {
+    /// What was restored, in words (task nodes, modules to rejoin, events replayed).
+    pub summary: String,
+    /// Records of the crashed central's last moments, which its traffic log lacked, written at
+    /// the start of the new log.
+    pub log_records_recovered: usize,
+    /// What could not be done about the traffic log, if anything.
+    pub warnings: Vec<String>,
 }
 
 impl RunningCentral {
@@ -232,6 +250,12 @@ impl RunningCentral {
     /// The transport of modules in this process (see [`CentralHandle::in_process`]).
     pub fn in_process(&self) -> InProcTransport {
         self.handle.in_process()
+    }
+
+    /// What was restored from the journal, when central was started on a crashed central's
+    /// journal ([`StartOptions::journal`]).
+    pub fn restored(&self) -> Option<&Restored> {
+        self.restored.as_ref()
     }
 
     /// The endpoints central listens on: local ones first, then zenoh ones.
@@ -247,7 +271,9 @@ impl RunningCentral {
         all
     }
 
-    /// Stops central: closes every link, finishes the log and returns the final statistics.
+    /// Stops central: closes every link, finishes the log and returns the final statistics. A
+    /// journal is removed: a central stopped on purpose ends its task trees, and the next one
+    /// starts afresh.
     pub async fn shutdown(self) -> Result<Stats> {
         let refused = self.handle.refused_by_router().await.unwrap_or(0);
         let _ = self.handle.tx.send(Input::Shutdown);
@@ -259,6 +285,19 @@ impl RunningCentral {
             z.close().await;
         }
         Ok(stats)
+    }
+
+    /// Stops central the way a crash (`kill -9`) would, for tests of recovery: the driver stops
+    /// where it is, every link drops, and nothing is cleaned up: the journal stays, for a
+    /// central started on it to restore. (Unlike a real crash, the traffic log's writer still
+    /// writes what it was handed.)
+    pub async fn crash(self) {
+        self.task.abort();
+        let _ = self.task.await;
+        drop(self.local);
+        if let Some(z) = self.zenoh {
+            z.close().await;
+        }
     }
 
     /// Waits until central stops by itself (it does not, unless the runtime fails).
@@ -285,6 +324,15 @@ pub struct StartOptions {
     /// it) and the second with [`CentralError::Unisolated`] (its router cannot keep modules
     /// from reading and speaking for each other).
     pub insecure: bool,
+    /// Keep central's task trees and queues in this journal (see `crate::journal`). If it holds
+    /// the state of a central that crashed, central starts from that state: the modules rejoin
+    /// and what they were doing goes on. A clean [`RunningCentral::shutdown`] removes it.
+    pub journal: Option<PathBuf>,
+    /// The traffic log of the central that crashed, when it was set aside
+    /// ([`tca_logs::set_aside`]) for the new one: the records of its last moments that it lacks
+    /// (the log is flushed every 50 ms, the journal before anything goes out) are written at the
+    /// start of the new log, so that the logs read in order tell the whole history.
+    pub previous_log: Option<PathBuf>,
 }
 
 impl StartOptions {
@@ -304,25 +352,6 @@ impl StartOptions {
 
 /// Starts central on the current tokio runtime.
 pub async fn start(options: StartOptions) -> Result<RunningCentral> {
-    let (tx, rx) = mpsc::unbounded_channel();
-    let handle = CentralHandle {
-        hub: Arc::new(DriverHub(tx.clone())),
-        tx,
-        router: Arc::default(),
-        next_link: Arc::new(AtomicU32::new(1)),
-        inbox_limits: (
-            options.config.max_inbox_frames,
-            options.config.max_inbox_bytes,
-        ),
-        outbox_limits: OutboxLimits::new(
-            options.config.max_outbox_frames,
-            options.config.max_outbox_bytes,
-        ),
-    };
-    let log = match &options.log {
-        Some(path) => Some(LogSink::create(path)?),
-        None => None,
-    };
     let (local_endpoints, zenoh_endpoints): (Vec<&String>, Vec<&String>) = options
         .listen
         .iter()
@@ -353,6 +382,72 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
             );
         }
     }
+    let recovered = match &options.journal {
+        Some(path) => Some(crate::journal::open(
+            path,
+            options.config.clone(),
+            options.previous_log.as_deref(),
+            options.log.is_some(),
+            now_ns(),
+        )?),
+        None => None,
+    };
+    let first_link = recovered
+        .as_ref()
+        .map_or(1, |r| r.core.highest_link().saturating_add(1).max(1));
+    let (tx, rx) = mpsc::unbounded_channel();
+    let handle = CentralHandle {
+        hub: Arc::new(DriverHub(tx.clone())),
+        tx,
+        router: Arc::default(),
+        next_link: Arc::new(AtomicU32::new(first_link)),
+        inbox_limits: (
+            options.config.max_inbox_frames,
+            options.config.max_inbox_bytes,
+        ),
+        outbox_limits: OutboxLimits::new(
+            options.config.max_outbox_frames,
+            options.config.max_outbox_bytes,
+        ),
+    };
+    // A restored central's journal gets its new head first, carrying the records its log is
+    // to start with (what the crashed central's log lacks, its links closing): a crash from
+    // here on finds them in the journal, whatever reached the log.
+    let mut pending_prefix = Vec::new();
+    let (core, journal, restored) = match recovered {
+        Some(mut r) => {
+            let mut core = r.core;
+            pending_prefix = std::mem::take(&mut r.log_prefix);
+            let journal =
+                r.pending
+                    .start(&mut core, options.log.is_some(), pending_prefix.clone())?;
+            for w in &r.warnings {
+                tracing::warn!(journal = %journal.path().display(), "{w}");
+            }
+            let restored = r.summary.map(|summary| {
+                tracing::info!("{summary}");
+                Restored {
+                    summary,
+                    log_records_recovered: r.recovered,
+                    warnings: r.warnings,
+                }
+            });
+            (core, Some(journal), restored)
+        }
+        None => (Central::new(options.config.clone()), None, None),
+    };
+    let mut log = match &options.log {
+        Some(path) => Some(LogSink::create(path)?),
+        None => None,
+    };
+    let mut logged = 0u64;
+    if let Some(sink) = log.as_mut()
+        && !pending_prefix.is_empty()
+    {
+        logged = pending_prefix.len() as u64;
+        sink.append_batch(pending_prefix);
+        flushed(sink.flush()).await;
+    }
     let mut local = Vec::new();
     if !local_endpoints.is_empty() {
         let peers = PeerPolicy::same_user_and(options.config.local_peer_uids.iter().copied())?;
@@ -379,14 +474,36 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
     };
     let limits = handle.outbox_limits;
     let max_log_backlog = options.config.max_log_backlog.max(1) as usize;
-    let core = Central::new(options.config);
-    let task = tokio::spawn(drive(core, limits, max_log_backlog, rx, log));
+    let task = tokio::spawn(drive(
+        Driver::new(core, limits, journal, logged),
+        max_log_backlog,
+        rx,
+        log,
+    ));
     Ok(RunningCentral {
         handle,
         task,
         zenoh,
         local,
+        restored,
     })
+}
+
+/// Waits until the log writer has written and flushed what was handed to it before `done` was
+/// asked for (at most 30 s: a writer that stopped has said why already).
+async fn flushed(done: std::sync::mpsc::Receiver<()>) {
+    let give_up = tokio::time::Instant::now() + Duration::from_secs(30);
+    loop {
+        match done.try_recv() {
+            Ok(()) | Err(std::sync::mpsc::TryRecvError::Disconnected) => return,
+            Err(std::sync::mpsc::TryRecvError::Empty) => {}
+        }
+        if tokio::time::Instant::now() > give_up {
+            tracing::warn!("the traffic-log writer did not flush within 30 s");
+            return;
+        }
+        tokio::time::sleep(Duration::from_millis(1)).await;
+    }
 }
 
 /// Most inputs handled between two hand-overs to the log writer.
@@ -432,9 +549,39 @@ struct Driver {
     /// Times that happened.
     log_waits: u64,
     stop: bool,
+    /// The journal, if central keeps one: actions wait in `deferred` until the entries of the
+    /// events that caused them are written.
+    journal: Option<Journal>,
+    /// Actions waiting for their causes to be journaled.
+    deferred: Vec<Action>,
+    /// Journal entries taken from the core, to write.
+    entries: Vec<u8>,
+    /// Records handed to the traffic log since central started.
+    logged: u64,
 }
 
 impl Driver {
+    fn new(core: Central, limits: OutboxLimits, journal: Option<Journal>, logged: u64) -> Self {
+        Driver {
+            core,
+            sinks: HashMap::new(),
+            limits,
+            inboxes: HashMap::new(),
+            ring: VecDeque::new(),
+            actions: Vec::with_capacity(256),
+            follow: VecDeque::new(),
+            records: Vec::new(),
+            high: HighWater::default(),
+            log_wait: false,
+            log_waits: 0,
+            stop: false,
+            journal,
+            deferred: Vec::new(),
+            entries: Vec::new(),
+            logged,
+        }
+    }
+
     /// Handles one input from the channel.
     fn input(&mut self, now: u64, input: Input) {
         match input {
@@ -504,20 +651,84 @@ impl Driver {
     fn event(&mut self, now: u64, event: Event) {
         self.carry_out(now, event);
         while let Some(follow) = self.follow.pop_front() {
-            let event = match follow {
-                FollowUp::Measure(link) => match self.sinks.get(&link) {
-                    Some(sink) => Event::OutboxLevel(link, sink.gauge.measure()),
-                    None => continue,
-                },
-                FollowUp::Full(link, used) => Event::OutboxFull(link, used),
-            };
-            self.carry_out(now, event);
+            if let Some(event) = self.follow_up(follow) {
+                self.carry_out(now, event);
+            }
         }
     }
 
-    /// Hands one event to the core and carries out its actions, in order.
+    /// The event a follow-up calls for, measured now.
+    fn follow_up(&self, follow: FollowUp) -> Option<Event> {
+        Some(match follow {
+            FollowUp::Measure(link) => {
+                Event::OutboxLevel(link, self.sinks.get(&link)?.gauge.measure())
+            }
+            FollowUp::Full(link, used) => Event::OutboxFull(link, used),
+        })
+    }
+
+    /// Hands one event to the core and carries out its actions, in order (with a journal:
+    /// once the event is journaled, see [`Driver::settle`]).
     fn carry_out(&mut self, now: u64, event: Event) {
+        if self.journal.is_some() {
+            let from = self.deferred.len();
+            self.core.handle(now, event, &mut self.deferred);
+            // A link the core closed is served no more, though what it was sent waits.
+            for action in &self.deferred[from..] {
+                if let Action::Close(link) = action
+                    && let Some(inbox) = self.inboxes.remove(link)
+                {
+                    fold_inbox(&mut self.high, &inbox);
+                    inbox.close();
+                }
+            }
+            return;
+        }
         self.core.handle(now, event, &mut self.actions);
+        self.execute();
+    }
+
+    /// Writes the journal entries of the events handled so far, then carries out the actions
+    /// they caused, then the events those call for (outbox levels), until nothing waits.
+    fn settle(&mut self, now: u64) {
+        loop {
+            self.write_journal();
+            if self.deferred.is_empty() {
+                return;
+            }
+            std::mem::swap(&mut self.actions, &mut self.deferred);
+            self.execute();
+            while let Some(follow) = self.follow.pop_front() {
+                if let Some(event) = self.follow_up(follow) {
+                    self.carry_out(now, event);
+                }
+            }
+        }
+    }
+
+    /// Writes the entries the core has made.
+    fn write_journal(&mut self) {
+        let Some(journal) = self.journal.as_mut() else {
+            return;
+        };
+        self.core.take_journal(&mut self.entries);
+        if self.entries.is_empty() {
+            return;
+        }
+        if let Err(e) = journal.append(&self.entries) {
+            tracing::error!(
+                journal = %journal.path().display(),
+                error = %e,
+                "the journal cannot be written; central goes on without it, and a crash now \
+                 loses its task trees"
+            );
+            self.journal = None;
+        }
+        self.entries.clear();
+    }
+
+    /// Carries out `self.actions`, in order.
+    fn execute(&mut self) {
         for action in self.actions.drain(..) {
             match action {
                 Action::Send(link, frame) => {
@@ -612,26 +823,11 @@ fn fold_inbox(high: &mut HighWater, inbox: &Inbox) {
 /// left in the inboxes (bounded: modules meet over-limit refusals) until it is back under half;
 /// everything else (links opening and closing, statistics, deadlines) goes on.
 async fn drive(
-    core: Central,
-    limits: OutboxLimits,
+    mut d: Driver,
     max_log_backlog: usize,
     mut rx: mpsc::UnboundedReceiver<Input>,
     mut log: Option<LogSink>,
 ) -> Result<Stats> {
-    let mut d = Driver {
-        core,
-        sinks: HashMap::new(),
-        limits,
-        inboxes: HashMap::new(),
-        ring: VecDeque::new(),
-        actions: Vec::with_capacity(256),
-        follow: VecDeque::new(),
-        records: Vec::new(),
-        high: HighWater::default(),
-        log_wait: false,
-        log_waits: 0,
-        stop: false,
-    };
     while !d.stop {
         if d.ring.is_empty() || d.log_wait {
             // Idle (or waiting for the log writer): sleep until an input, the core's next
@@ -678,7 +874,9 @@ async fn drive(
                 d.event(now, Event::Tick);
             }
         }
+        d.settle(now);
         if let Some(l) = log.as_mut() {
+            d.logged += d.records.len() as u64;
             l.append_batch(std::mem::take(&mut d.records));
             let backlog = l.backlog();
             d.high.log_records = d.high.log_records.max(backlog as u64);
@@ -691,13 +889,50 @@ async fn drive(
         } else {
             d.records.clear();
         }
+        if d.journal.as_ref().is_some_and(Journal::wants_rewrite) {
+            rewrite_journal(&mut d, log.as_mut()).await;
+        }
     }
+    d.settle(now_ns());
     let final_stats = d.stats();
+    let journal = d.journal.take();
     drop(d);
     if let Some(l) = log {
         l.finish()?;
     }
+    // Stopped on purpose: the next central starts afresh.
+    if let Some(journal) = journal
+        && let Err(e) = journal.remove()
+    {
+        tracing::warn!(error = %e, "the journal could not be removed");
+    }
     Ok(final_stats)
+}
+
+/// Rewrites the journal as central's state now, once the traffic log has written every record
+/// handed to it (the new head says how many: a restart counts on them being in the log).
+async fn rewrite_journal(d: &mut Driver, log: Option<&mut LogSink>) {
+    let logged = match log {
+        Some(l) => {
+            flushed(l.flush()).await;
+            Some(d.logged)
+        }
+        None => None,
+    };
+    let Some(journal) = d.journal.as_mut() else {
+        return;
+    };
+    let result = crate::journal::head(&d.core, journal.id(), logged, Vec::new())
+        .map_err(|reason| reason.to_string())
+        .and_then(|head| journal.rewrite(&head).map_err(|e| e.to_string()));
+    if let Err(e) = result {
+        tracing::error!(
+            error = %e,
+            "the journal cannot be rewritten; central goes on without it, and a crash now loses \
+             its task trees"
+        );
+        d.journal = None;
+    }
 }
 
 fn stats(core: &Central) -> Stats {

@@ -47,6 +47,26 @@ impl LogFile {
         Self::parse(path, &bytes)
     }
 
+    /// The logs of one central and its restarts on its journal, read in order (the crashed
+    /// ones, as `tca central` kept them, `traffic.1.mcap`, `traffic.2.mcap`, ..., then the
+    /// last), as one log: their records one after the other (a restarted central's log starts
+    /// with what the crashed one's lacked), the formats of all. `truncated` is the last one's.
+    pub fn chain(logs: Vec<LogFile>) -> LogFile {
+        let mut all = LogFile {
+            path: PathBuf::new(),
+            records: Vec::new(),
+            formats: HashMap::new(),
+            truncated: None,
+        };
+        for log in logs {
+            all.path = log.path;
+            all.records.extend(log.records);
+            all.formats.extend(log.formats);
+            all.truncated = log.truncated;
+        }
+        all
+    }
+
     /// Parses log bytes (see [`LogFile::open`]).
     pub fn parse(path: &Path, bytes: &[u8]) -> Result<Self> {
         // The mcap crate can trip an arithmetic overflow check on some malformed chunks (a

@@ -16,7 +16,7 @@ pub enum Direction {
 }
 
 /// One log record with central's time.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LogRecord {
     /// When central handled it: nanoseconds since the UNIX epoch.
     pub at_ns: u64,
@@ -25,7 +25,7 @@ pub struct LogRecord {
 }
 
 /// What a record holds.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub enum RecordKind {
     /// A frame that passed through central.
     Frame(FrameRecord),
@@ -114,15 +114,19 @@ pub struct ProblemRecord {
     pub frame_prefix: Vec<u8>,
 }
 
-pub(crate) mod bytes_serde {
+/// `bytes::Bytes` (de)serialized as a byte string (for `#[serde(with = ...)]`): compact in
+/// postcard, where the default would be a sequence of numbers.
+pub mod bytes_serde {
     use bytes::Bytes;
     use serde::{Deserializer, Serializer};
 
-    pub(crate) fn serialize<S: Serializer>(v: &Bytes, s: S) -> Result<S::Ok, S::Error> {
+    /// Serializes `v` as a byte string.
+    pub fn serialize<S: Serializer>(v: &Bytes, s: S) -> Result<S::Ok, S::Error> {
         s.serialize_bytes(v)
     }
 
-    pub(crate) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Bytes, D::Error> {
+    /// Deserializes a byte string.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Bytes, D::Error> {
         struct V;
         impl serde::de::Visitor<'_> for V {
             type Value = Bytes;

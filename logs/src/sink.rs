@@ -9,7 +9,7 @@
 //! still written, in order; the file is flushed every [`FLUSH_INTERVAL`] as before.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, mpsc};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -30,6 +30,8 @@ pub const WAKE_AT_RECORDS: usize = 4096;
 #[derive(Default)]
 struct Queue {
     records: Vec<LogRecord>,
+    /// Callers waiting for everything queued before them to be written and flushed.
+    flushes: Vec<mpsc::Sender<()>>,
     /// The thread sleeps until woken (it does not poll).
     asleep: bool,
     finishing: bool,
@@ -112,6 +114,20 @@ impl LogSink {
         }
     }
 
+    /// Asks the writer thread to write and flush to the operating system every record queued
+    /// so far; the receiver gets `()` once it has (or is dropped if the thread has stopped).
+    pub fn flush(&mut self) -> mpsc::Receiver<()> {
+        let (tx, rx) = mpsc::channel();
+        if self.thread.as_ref().is_some_and(|t| !t.is_finished()) {
+            let mut q = self.shared.lock();
+            q.flushes.push(tx);
+            q.asleep = false;
+            drop(q);
+            self.shared.wake.notify_one();
+        }
+        rx
+    }
+
     /// Writes what is queued, the summary, and closes the file.
     pub fn finish(mut self) -> Result<()> {
         self.stop()
@@ -138,6 +154,7 @@ impl Drop for LogSink {
 /// The writer thread: takes what is queued, writes it, flushes on time, and polls or sleeps.
 fn run(mut writer: LogWriter, shared: &Shared) -> Result<()> {
     let mut batch = Vec::new();
+    let mut flushes = Vec::new();
     let mut dirty = false;
     let mut last_flush = Instant::now();
     let mut last_record = Instant::now();
@@ -145,7 +162,7 @@ fn run(mut writer: LogWriter, shared: &Shared) -> Result<()> {
         let finishing = {
             let mut q = shared.lock();
             loop {
-                if !q.records.is_empty() || q.finishing {
+                if !q.records.is_empty() || !q.flushes.is_empty() || q.finishing {
                     break;
                 }
                 let flush_in = dirty.then(|| FLUSH_INTERVAL.saturating_sub(last_flush.elapsed()));
@@ -160,7 +177,7 @@ fn run(mut writer: LogWriter, shared: &Shared) -> Result<()> {
                         .wait_timeout(q, wait)
                         .unwrap_or_else(|p| p.into_inner())
                         .0;
-                    if q.records.is_empty() {
+                    if q.records.is_empty() && q.flushes.is_empty() {
                         // A poll that finds nothing ends here; the idle clock goes on.
                         break;
                     }
@@ -181,6 +198,7 @@ fn run(mut writer: LogWriter, shared: &Shared) -> Result<()> {
                 }
             }
             std::mem::swap(&mut batch, &mut q.records);
+            std::mem::swap(&mut flushes, &mut q.flushes);
             q.finishing
         };
         if !batch.is_empty() {
@@ -193,6 +211,14 @@ fn run(mut writer: LogWriter, shared: &Shared) -> Result<()> {
             batch.clear();
             dirty = true;
             last_record = Instant::now();
+        }
+        if !flushes.is_empty() {
+            writer.flush()?;
+            dirty = false;
+            last_flush = Instant::now();
+            for done in flushes.drain(..) {
+                let _ = done.send(());
+            }
         }
         if finishing {
             break;
@@ -253,6 +279,20 @@ mod tests {
             })
             .collect();
         assert_eq!(links, (0..next).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn a_flush_returns_once_every_earlier_record_is_on_disk() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("sink.mcap");
+        let mut sink = LogSink::create(&path).unwrap();
+        std::thread::sleep(IDLE_AFTER * 2);
+        sink.append_batch((0..100).map(link_record).collect());
+        sink.flush()
+            .recv_timeout(Duration::from_secs(10))
+            .expect("the flush is answered");
+        assert_eq!(sink.backlog(), 0);
+        sink.finish().unwrap();
     }
 
     #[test]

@@ -60,6 +60,9 @@ pub mod names {
     pub const TAP: &str = "tca.tap";
     /// Central -> module: a copy of a message of a name it taps ([`super::Tapped`]).
     pub const TAPPED: &str = "tca.tapped";
+    /// Module -> central: what became of goals and commands the module sent
+    /// ([`super::TaskStatusRequest`]); answered with a list of [`super::TaskStatus`].
+    pub const TASK_STATUS: &str = "tca.taskStatus";
 }
 
 /// Name of the pseudo-module central uses as sender of its own messages.
@@ -134,6 +137,11 @@ pub struct Welcome {
     /// order and follows each simulated module's handlers, which then tell it when an
     /// inform's handler ended and when a handler waits for a task's end.
     pub simulated_clock: bool,
+    /// The id of the journal central keeps its task trees and queues in, if it keeps one. A
+    /// central restarted on the same journal after a crash welcomes with the same id: a module
+    /// that rejoins it knows that the tasks it sent live on there (and asks what became of
+    /// them with [`TaskStatusRequest`]); a different id, or none, means they are lost.
+    pub journal: Option<u64>,
 }
 
 /// One message a module offers to handle.
@@ -292,6 +300,37 @@ pub struct Tap {
     pub names: Vec<MessageName>,
 }
 
+/// Ask central what became of goals and commands the asking module sent (by the ids of their
+/// messages): a module that rejoins a central restarted on its journal asks this for the tasks
+/// whose ends it waits for, since ends told while it was away did not reach it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TaskStatusRequest {
+    /// The ids of the messages that created the tasks.
+    pub tasks: Vec<crate::id::MessageId>,
+}
+
+/// What central knows of one task a module asked about ([`TaskStatusRequest`]).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct TaskStatus {
+    /// The id of the message that created the task.
+    pub task: crate::id::MessageId,
+    /// Where it stands.
+    pub state: TaskState,
+}
+
+/// Where a task a module asked about stands.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum TaskState {
+    /// Central holds it (waiting, running or waiting for its children): its end will be told.
+    Live,
+    /// It ended, this way (central remembers the latest few thousand ends it told or could not
+    /// tell).
+    Ended(TaskOutcome),
+    /// Central has no such task from this module: it never reached central, or it ended too
+    /// long ago to be remembered.
+    Unknown,
+}
+
 /// A copy of a tapped message.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Tapped {
@@ -370,11 +409,13 @@ pub enum ControlKind {
     KillAll,
     /// [`names::TAP`].
     Tap,
+    /// [`names::TASK_STATUS`].
+    TaskStatus,
 }
 
 impl ControlKind {
     /// Every kind of control request.
-    pub const ALL: [ControlKind; 15] = [
+    pub const ALL: [ControlKind; 16] = [
         ControlKind::Hello,
         ControlKind::HelloAuth,
         ControlKind::Register,
@@ -390,6 +431,7 @@ impl ControlKind {
         ControlKind::KillTask,
         ControlKind::KillAll,
         ControlKind::Tap,
+        ControlKind::TaskStatus,
     ];
 
     /// The wire name.
@@ -410,6 +452,7 @@ impl ControlKind {
             ControlKind::KillTask => names::KILL_TASK,
             ControlKind::KillAll => names::KILL_ALL,
             ControlKind::Tap => names::TAP,
+            ControlKind::TaskStatus => names::TASK_STATUS,
         }
     }
 
@@ -487,6 +530,8 @@ pub enum ControlRequest {
     KillAll,
     /// Copy the traffic of some names to the sender; answered with `()`.
     Tap(Tap),
+    /// What became of tasks the sender sent; answered with a list of [`TaskStatus`].
+    TaskStatus(TaskStatusRequest),
 }
 
 /// Why a control request could not be read.
@@ -530,6 +575,7 @@ impl ControlRequest {
             ControlRequest::KillTask(_) => ControlKind::KillTask,
             ControlRequest::KillAll => ControlKind::KillAll,
             ControlRequest::Tap(_) => ControlKind::Tap,
+            ControlRequest::TaskStatus(_) => ControlKind::TaskStatus,
         }
     }
 
@@ -557,6 +603,7 @@ impl ControlRequest {
             ControlRequest::Await(a) => enc(a),
             ControlRequest::KillTask(k) => enc(k),
             ControlRequest::Tap(t) => enc(t),
+            ControlRequest::TaskStatus(t) => enc(t),
         }
     }
 
@@ -591,6 +638,7 @@ impl ControlRequest {
             ControlKind::KillTask => ControlRequest::KillTask(dec(kind, data)?),
             ControlKind::KillAll => ControlRequest::KillAll,
             ControlKind::Tap => ControlRequest::Tap(dec(kind, data)?),
+            ControlKind::TaskStatus => ControlRequest::TaskStatus(dec(kind, data)?),
         })
     }
 }
@@ -672,6 +720,9 @@ mod tests {
             }),
             ControlRequest::Tap(Tap {
                 names: vec![MessageName::new("bodyMove").unwrap()],
+            }),
+            ControlRequest::TaskStatus(TaskStatusRequest {
+                tasks: vec![crate::id::MessageId::new(3, 8)],
             }),
         ];
         for r in requests {

@@ -25,6 +25,13 @@ pub(crate) struct CentralArgs {
     /// crashed) is kept as FILE-STEM.N.mcap, never overwritten.
     #[arg(long, value_name = "FILE")]
     log: Option<PathBuf>,
+    /// Keep central's task trees and queues in this journal. Started again on the same journal
+    /// after a crash (kill -9, a panic, the machine's supervisor), central comes back with
+    /// them: the modules rejoin by themselves, a goal a module was running is delivered to it
+    /// again (marked as a redelivery) and an interrupted walk goes on to its goal. Stopping
+    /// central with Ctrl-C ends its tasks and removes the journal.
+    #[arg(long, value_name = "FILE")]
+    journal: Option<PathBuf>,
     /// Most messages held for one module while it is down.
     #[arg(long, default_value_t = CentralConfig::default().max_waiting)]
     max_waiting: u32,
@@ -82,6 +89,17 @@ pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
         )),
         None => None,
     };
+    let kept = match &args.log {
+        Some(log) => tca_logs::set_aside(log).context("cannot keep the previous log")?,
+        None => None,
+    };
+    if let (Some(log), Some(kept)) = (&args.log, &kept) {
+        eprintln!(
+            "the previous log {} is kept as {}",
+            log.display(),
+            kept.display()
+        );
+    }
     let options = StartOptions {
         config: CentralConfig {
             max_waiting: args.max_waiting,
@@ -102,19 +120,25 @@ pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
         log: args.log.clone(),
         listen: args.listen.clone(),
         insecure: args.insecure,
+        journal: args.journal.clone(),
+        previous_log: kept,
     };
-    if let Some(log) = &args.log
-        && let Some(kept) = tca_logs::set_aside(log).context("cannot keep the previous log")?
-    {
-        eprintln!(
-            "the previous log {} is kept as {}",
-            log.display(),
-            kept.display()
-        );
-    }
     let central = tca_central::start(options)
         .await
         .context("cannot start central")?;
+    if let Some(restored) = central.restored() {
+        eprintln!("{}", restored.summary);
+        if restored.log_records_recovered > 0 {
+            eprintln!(
+                "the new log starts with {} record(s) of the crashed central's last moments, \
+                 which its log lacked",
+                restored.log_records_recovered
+            );
+        }
+        for w in &restored.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
     eprintln!(
         "central listening on {}{}; Ctrl-C stops it",
         central.listening().join(", "),

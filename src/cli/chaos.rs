@@ -16,6 +16,12 @@ pub(crate) struct ChaosArgs {
     /// Module kills (SIGKILL, then a restart) to make across the walks.
     #[arg(long, default_value_t = 5)]
     kills: usize,
+    /// Kill central itself instead of the modules: central runs as its own process on a
+    /// journal (`tca central --journal`), is killed with SIGKILL at random moments of the walks
+    /// and started again at once; every walk must still reach its goal without being sent again,
+    /// and the logs of all the centrals, read in order, must pass the audit.
+    #[arg(long, conflicts_with = "victims")]
+    kill_central: bool,
     /// Plan the next step while the current one executes (§3.3).
     #[arg(long)]
     concurrent: bool,
@@ -68,6 +74,7 @@ pub(crate) async fn run(args: ChaosArgs) -> anyhow::Result<ExitCode> {
         exe: std::env::current_exe().context("cannot find the tca executable")?,
         victims: args.victims.clone(),
         concurrent: args.concurrent,
+        kill_central: args.kill_central,
     };
     let report = tca_chaos::run(&options, |line| eprintln!("{line}")).await?;
     print!("{}", tca_chaos::summary(&report));

@@ -28,7 +28,10 @@ pub(crate) enum LogCommand {
 #[derive(Debug, Args)]
 pub(crate) struct AuditArgs {
     /// The log file (of a run that ended cleanly; a crashed central's log ends mid-flight).
-    file: PathBuf,
+    /// Several files are audited as one history, in the order given: the logs of a central
+    /// restarted on its journal (`traffic.1.mcap traffic.2.mcap ... traffic.mcap`).
+    #[arg(required = true, num_args = 1..)]
+    file: Vec<PathBuf>,
     /// Print JSON.
     #[arg(long)]
     json: bool,
@@ -98,8 +101,14 @@ pub(crate) async fn run(cmd: LogCommand) -> anyhow::Result<ExitCode> {
     match cmd {
         LogCommand::Replay(args) => super::replay::run(args).await,
         LogCommand::Audit(args) => {
-            let log = LogFile::open(&args.file)
-                .with_context(|| format!("cannot read log {}", args.file.display()))?;
+            let mut logs = Vec::new();
+            for file in &args.file {
+                logs.push(
+                    LogFile::open(file)
+                        .with_context(|| format!("cannot read log {}", file.display()))?,
+                );
+            }
+            let log = LogFile::chain(logs);
             let audit = tca_logs::audit(&log);
             let time = tca_logs::time_check(&log);
             if args.json {

@@ -29,6 +29,7 @@
 //! - `render`: the tree as indented text.
 //! - `view`: [`NodeView`], a read-only window on a node.
 //! - `op`: [`TreeOp`], mutations as data, and replay.
+//! - `snapshot`: the whole tree saved and restored (`Serialize`, `Deserialize`).
 //! - `store`: node storage in fixed-size pages indexed by id, freed as nodes retire.
 //! - `node`, `hash`: the internal node record and the id hasher.
 //!
@@ -143,7 +144,8 @@
 //! before dispatching, since a constraint or suspension added later can take readiness
 //! away (a new `Ready` follows when it comes back). Each mutating call corresponds to a
 //! [`TreeOp`]; [`TaskTree::apply`] replays ops into a fresh tree and reproduces the same
-//! ids, states and events.
+//! ids, states and events. A tree also saves and restores whole (it is `Serialize` and
+//! `Deserialize`): the restored tree goes on exactly as the saved one would have.
 //!
 //! # Choices, and why
 //!
@@ -209,6 +211,7 @@ mod propagate;
 mod readiness;
 mod render;
 mod retire;
+mod snapshot;
 mod spec;
 mod state;
 mod store;

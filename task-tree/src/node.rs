@@ -1,5 +1,7 @@
 //! The record the tree keeps for each live node.
 
+use serde::{Deserialize, Serialize};
+
 use crate::id::Nanos;
 use crate::id::NodeId;
 use crate::point::{Endpoint, Point};
@@ -13,14 +15,14 @@ pub(crate) const NOT_YET: Nanos = Nanos::MAX;
 /// In a node's `waits_on` list, `own` is the node's point that waits and `other` the point
 /// it waits for (`other <= own`). In its `gates` list, `own` is the node's point that must
 /// come first and `other` the point that waits for it (`own <= other`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub(crate) struct Edge {
     pub(crate) own: Point,
     pub(crate) other: Endpoint,
 }
 
 /// A live node.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub(crate) struct Node {
     pub(crate) kind: NodeKind,
     pub(crate) name: Box<str>,

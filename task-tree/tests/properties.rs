@@ -639,6 +639,23 @@ fn check(run: &Run) {
         );
     }
     assert_eq!(events, run.events);
+    // A tree saved part-way and restored goes on exactly as the original did.
+    for cut in [ops.len() / 3, ops.len() * 2 / 3] {
+        let (mut tree, mut events) = TaskTree::replay(&ops[..cut]).expect("prefix replays");
+        let saved = serde_json::to_string(&tree).expect("tree saves");
+        tree = serde_json::from_str(&saved).expect("tree restores");
+        for (i, (op, render)) in ops[cut..].iter().zip(&run.renders[cut..]).enumerate() {
+            events.extend(tree.apply(op).expect("op applies to the restored tree"));
+            if i % 8 == 0 {
+                assert_eq!(
+                    &tree.render_text(),
+                    render,
+                    "restored tree differs after {op:?}"
+                );
+            }
+        }
+        assert_eq!(events, run.events, "restored at op {cut}");
+    }
 }
 
 proptest! {

@@ -27,13 +27,14 @@
 use std::collections::BTreeMap;
 
 use rustc_hash::FxHashMap as HashMap;
+use serde::{Deserialize, Serialize};
 use tca_messages::control::ControlKind;
 use tca_messages::{Class, Envelope, MessageId, ModuleName, is_simulated_stamp};
 
 use super::LinkId;
 
 /// Something waiting in the queue for its simulated time.
-#[derive(Debug)]
+#[derive(Debug, Serialize, Deserialize)]
 pub(super) enum Deferred {
     /// A frame to route, as it arrived.
     Frame {
@@ -59,7 +60,7 @@ pub(super) enum Deferred {
 }
 
 /// A handler central follows.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 struct Handler {
     module: ModuleName,
     class: Class,
@@ -68,7 +69,7 @@ struct Handler {
 }
 
 /// The simulated clock and the event queue.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Serialize, Deserialize)]
 pub(super) struct SimClock {
     /// The clock is on (central keeps simulated time).
     pub(super) on: bool,
@@ -289,6 +290,16 @@ impl SimClock {
             Some(Deferred::Frame { link, envelope, .. }) => Some((link, envelope)),
             _ => None,
         }
+    }
+
+    /// Whether the goal or command of message `id` from `sender` waits in the queue as it
+    /// arrived (not yet a task).
+    pub(super) fn holds_task_frame(&self, id: MessageId, sender: &ModuleName) -> bool {
+        self.on
+            && self.queue.values().any(|e| {
+                matches!(e, Deferred::Frame { module, envelope, .. }
+                    if envelope.id == id && module == sender && envelope.class.is_task())
+            })
     }
 
     /// Forgets the queued checks of a monitor on `node`.

@@ -29,7 +29,7 @@ use super::{Action, Central, LinkId};
 pub(super) type Attachments = HashMap<u64, Vec<(MessageName, ModuleName)>>;
 
 /// An exception being handled.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct OpenException {
     /// The exception as raised.
     envelope: Envelope,
@@ -277,10 +277,14 @@ impl Central {
     /// The module handling some exceptions went down: they are delivered again when it returns.
     pub(super) fn requeue_exceptions_of(&mut self, module: &ModuleName) {
         let now = self.now;
-        let mine: Vec<Envelope> = self
+        let mut open: Vec<&OpenException> = self
             .exceptions
             .values()
             .filter(|e| &e.handler == module)
+            .collect();
+        open.sort_unstable_by_key(|e| e.envelope.id);
+        let mine: Vec<Envelope> = open
+            .into_iter()
             .map(|e| {
                 let mut d = e.envelope.clone();
                 d.node = Some(tca_messages::NodeId(e.at));

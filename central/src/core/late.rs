@@ -11,7 +11,7 @@ use tca_messages::{MessageId, ModuleName};
 pub(super) const LATE_MEMORY: usize = 4096;
 
 /// Ids whose answer from a given module would now come too late.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(super) struct LateAnswers {
     by_id: HashMap<MessageId, ModuleName>,
     order: VecDeque<MessageId>,

@@ -13,6 +13,7 @@ impl Central {
         if self.links.contains_key(&link) {
             return;
         }
+        self.max_link = self.max_link.max(link);
         self.links.insert(
             link,
             Link {
@@ -65,15 +66,18 @@ impl Central {
             let reason = "the module name \"central\" is reserved; choose another".to_owned();
             return self.refuse(link, &envelope, reason, out);
         }
-        if let Some(existing) = self.modules.get(&hello.module)
-            && let Some(other) = existing.link
-            && crate::process::is_gone(&existing.hello.host, existing.hello.pid)
+        let old = self
+            .modules
+            .get(&hello.module)
+            .and_then(|m| m.link.map(|link| (link, m.hello.host.clone(), m.hello.pid)));
+        if let Some((other, host, pid)) = old
+            && self.process_gone(&host, pid)
         {
             // Its process is gone but its link has not dropped yet: the new one takes over.
             tracing::warn!(
                 module = %hello.module,
                 old_link = other,
-                old_pid = existing.hello.pid,
+                old_pid = pid,
                 "module's old process is gone; its link is replaced by the new hello"
             );
             self.link_closed(other, out);
@@ -90,18 +94,13 @@ impl Central {
             return self.refuse(link, &envelope, reason, out);
         }
         let transport_identity = self.links.get(&link).and_then(|l| l.identity.clone());
-        let grant = match &self.config.policy {
-            Some(policy) => {
-                match policy.authenticate(
-                    hello.module.as_str(),
-                    credentials.as_ref(),
-                    transport_identity.as_deref(),
-                ) {
-                    Ok(grant) => Some(grant),
-                    Err(reason) => return self.refuse(link, &envelope, reason, out),
-                }
-            }
-            None => None,
+        let grant = match self.admission(
+            hello.module.as_str(),
+            credentials.as_ref(),
+            transport_identity.as_deref(),
+        ) {
+            Ok(grant) => grant,
+            Err(reason) => return self.refuse(link, &envelope, reason, out),
         };
         let capacity = if hello.capacity == 0 {
             self.config.default_capacity.max(1)
@@ -152,6 +151,7 @@ impl Central {
             link,
             central_version: env!("CARGO_PKG_VERSION").to_owned(),
             simulated_clock: self.config.simulated_time,
+            journal: self.journal.id,
         });
         let reply = self.notice_envelope(&welcome, Some(envelope.id));
         self.send(link, &reply, out);

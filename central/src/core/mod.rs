@@ -19,11 +19,17 @@
 //! - `tree`: the adapter to `tca-task-tree`;
 //! - `clock`: the simulated clock, when central keeps one: events released in simulated-time
 //!   order, one at a time, while every handler has finished or waits.
+//! - `ends`: the ends of watched tasks, remembered so that a module that was away can ask what
+//!   became of the tasks it sent (`tca.taskStatus`);
+//! - `journal`: what the core gives its journal (every event, with the facts it looked up) and
+//!   takes back from it (its saved state, the events replayed).
 
 mod clock;
 mod congestion;
+mod ends;
 mod event;
 mod exceptions;
+mod journal;
 mod late;
 mod links;
 mod monitors;
@@ -39,6 +45,8 @@ mod waiting;
 #[cfg(test)]
 mod fuzz_tests;
 #[cfg(test)]
+mod journal_tests;
+#[cfg(test)]
 mod tests;
 
 use std::collections::{BTreeMap, VecDeque};
@@ -46,6 +54,7 @@ use std::collections::{BTreeMap, VecDeque};
 use rustc_hash::FxHashMap as HashMap;
 
 use bytes::Bytes;
+use serde::{Deserialize, Serialize};
 use tca_logs::{Direction, FrameRecord, LogRecord, ProblemRecord, RecordKind};
 use tca_messages::control::{CENTRAL, ControlKind, Hello};
 use tca_messages::{
@@ -54,6 +63,7 @@ use tca_messages::{
 };
 
 pub use event::{Action, Event, InboxUse, LinkId, OutboxUse};
+pub use journal::{Fact, JournalEntry, JournaledEvent, RestoreError, SavedGrant};
 pub use quota::Usage;
 
 use crate::config::CentralConfig;
@@ -78,9 +88,16 @@ fn clock_event(envelope: &Envelope) -> bool {
 }
 
 /// Central control's state machine.
+///
+/// It serializes to its whole state but its configuration (see [`Central::save`]); that form
+/// is central's own and changes between versions.
+#[derive(Serialize, Deserialize)]
 pub struct Central {
+    #[serde(skip)]
     config: CentralConfig,
     links: HashMap<LinkId, Link>,
+    /// The highest link number seen (see [`Central::highest_link`]).
+    max_link: LinkId,
     modules: HashMap<ModuleName, ModuleState>,
     registry: BTreeMap<MessageName, Entry>,
     folded: HashMap<String, MessageName>,
@@ -99,8 +116,12 @@ pub struct Central {
     queued: HashMap<ModuleName, Usage>,
     /// The most one sender has had held at once (messages and bytes, each on its own).
     queued_high: Usage,
+    /// How the latest watched tasks ended (see `ends`).
+    ends: ends::RecentEnds,
+    #[serde(skip, default = "central_name")]
     central_name: ModuleName,
     /// The marks of every link's outbox.
+    #[serde(skip, default = "default_outbox_limits")]
     outbox_limits: OutboxLimits,
     seq: u32,
     now: u64,
@@ -111,10 +132,22 @@ pub struct Central {
     /// The simulated clock and its event queue (off unless `simulated_time`).
     clock: clock::SimClock,
     counters: Counters,
+    /// What goes to the journal, and what comes back from it (not saved).
+    #[serde(skip)]
+    journal: journal::Recorder,
+}
+
+fn central_name() -> ModuleName {
+    ModuleName::new(CENTRAL).unwrap_or_else(|_| unreachable!())
+}
+
+fn default_outbox_limits() -> OutboxLimits {
+    let c = CentralConfig::default();
+    OutboxLimits::new(c.max_outbox_frames, c.max_outbox_bytes)
 }
 
 /// Running totals, for statistics and tests.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Counters {
     /// Frames received.
     pub frames_in: u64,
@@ -136,7 +169,7 @@ pub struct Counters {
 }
 
 /// A transport link.
-#[derive(Debug)]
+#[derive(Debug, Serialize, Deserialize)]
 struct Link {
     module: Option<ModuleName>,
     /// The identity its transport authenticated (None: the transport knows no identity).
@@ -145,11 +178,12 @@ struct Link {
     /// to it.
     congested: bool,
     /// Its outbox as last measured, plus every frame sent to it since: at least what it holds.
+    #[serde(with = "journal::outbox_serde")]
     unread: OutboxUse,
 }
 
 /// What central knows of a module, connected or not.
-#[derive(Debug)]
+#[derive(Debug, Serialize, Deserialize)]
 struct ModuleState {
     link: Option<LinkId>,
     hello: Hello,
@@ -162,6 +196,7 @@ struct ModuleState {
     /// When the module went down (None while connected).
     down_since: Option<u64>,
     /// What the policy lets it do (None: no policy, everything).
+    #[serde(with = "journal::grant_serde")]
     grant: Option<Grant>,
 }
 
@@ -173,6 +208,7 @@ impl Central {
         Central {
             config,
             links: HashMap::default(),
+            max_link: 0,
             modules: HashMap::default(),
             registry: BTreeMap::new(),
             folded: HashMap::default(),
@@ -187,13 +223,15 @@ impl Central {
             taps: HashMap::default(),
             queued: HashMap::default(),
             queued_high: Usage::default(),
-            central_name: ModuleName::new(CENTRAL).unwrap_or_else(|_| unreachable!()),
+            ends: ends::RecentEnds::default(),
+            central_name: central_name(),
             outbox_limits,
             seq: 0,
             now: 0,
             cause_stamp: 0,
             clock,
             counters: Counters::default(),
+            journal: journal::Recorder::default(),
         }
     }
 
@@ -210,6 +248,7 @@ impl Central {
     /// Handles one event at time `now_ns` (nanoseconds since the UNIX epoch), appending the
     /// resulting actions to `out`.
     pub fn handle(&mut self, now_ns: u64, event: Event, out: &mut Vec<Action>) {
+        let journaled = self.journal_begin(&event);
         self.now = self.now.max(now_ns);
         match event {
             Event::Opened(link) => self.link_opened(link, out),
@@ -226,6 +265,7 @@ impl Central {
             Event::OutboxFull(link, used) => self.outbox_full(link, used, out),
         }
         self.pump(out);
+        self.journal_end(now_ns, journaled);
     }
 
     /// The time task-tree operations happen at: the simulated clock's when central keeps one
@@ -318,8 +358,10 @@ impl Central {
             self.cause_stamp = envelope.timestamp_ns;
         }
         let frame = if control == Some(ControlKind::HelloAuth) {
-            // Never write a secret to the log.
-            permissions::redacted_hello(&envelope).unwrap_or_default()
+            // Never write a secret to the log (nor the journal).
+            let redacted = permissions::redacted_hello(&envelope).unwrap_or_default();
+            self.journal_redacted(&redacted);
+            redacted
         } else {
             frame
         };

@@ -12,7 +12,7 @@ use super::routing::OpenQuery;
 use super::{Action, Central, clock};
 
 /// A live monitor.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct MonitorState {
     spec: Monitor,
     started: bool,

@@ -9,7 +9,7 @@ use tca_messages::{ModuleName, RouteError};
 use super::{Action, Central, InboxUse, LinkId};
 
 /// Messages and data bytes held for one sender.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Usage {
     /// Messages held.
     pub messages: u64,

@@ -7,7 +7,7 @@ use tca_messages::{Class, DataFormat, Envelope, MessageName, ModuleName, RouteEr
 use super::{Action, Central, LinkId};
 
 /// One registered message.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct Entry {
     pub(super) class: Class,
     pub(super) handler: ModuleName,

@@ -8,7 +8,7 @@ use super::waiting::Waiting;
 use super::{Action, Central, LinkId};
 
 /// A query on its way to its handler or waiting for the reply.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct OpenQuery {
     pub(super) asker: ModuleName,
     pub(super) handler: ModuleName,
@@ -121,6 +121,8 @@ impl Central {
             .filter(|(_, q)| &q.asker == module)
             .map(|(id, q)| (*id, q.handler.clone()))
             .collect();
+        let mut orphaned = orphaned;
+        orphaned.sort_unstable_by_key(|(id, _)| *id);
         for (id, handler) in orphaned {
             self.queries.remove(&id);
             self.late.expect(id, handler);
@@ -137,6 +139,8 @@ impl Central {
             .filter(|(id, q)| &q.handler == module && !held.contains(id))
             .map(|(id, q)| (*id, q.asker.clone(), q.name.clone()))
             .collect();
+        let mut lost = lost;
+        lost.sort_unstable_by_key(|(id, _, _)| *id);
         for (id, asker, name) in lost {
             self.queries.remove(&id);
             let Some(link) = self.modules.get(&asker).and_then(|m| m.link) else {
@@ -189,6 +193,11 @@ impl Central {
             ControlRequest::Bye => {
                 self.reply_control(link, &envelope, &(), out);
                 return self.bye(link, out);
+            }
+            ControlRequest::TaskStatus(request) => {
+                let status = self.task_status(&module, request);
+                self.reply_control(link, &envelope, &status, out);
+                return;
             }
             ControlRequest::Tree => {
                 let view = TreeView {

@@ -21,7 +21,7 @@ use tca_messages::{
 use super::{Action, Central};
 
 /// What one module taps.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(super) enum TapSet {
     /// Every name.
     All,
@@ -77,12 +77,13 @@ impl Central {
         {
             return;
         }
-        let links: Vec<_> = self
+        let mut links: Vec<_> = self
             .taps
             .iter()
             .filter(|(_, set)| set.matches(&envelope.name))
             .filter_map(|(m, _)| self.modules.get(m).and_then(|s| s.link))
             .collect();
+        links.sort_unstable();
         if links.is_empty() {
             return;
         }

@@ -1,6 +1,7 @@
 //! Goals and commands: task-tree nodes, dispatched when their constraints hold and their
 //! handler module has capacity (TCA's resource management).
 
+use serde::{Deserialize, Serialize};
 use tca_messages::control::{Cancel, ControlNotice, TaskEnded, TaskOutcome};
 use tca_messages::{
     Class, ConstraintSpec, Envelope, Failure, MessageId, ModuleName, NodeId, RouteError, TaskRef,
@@ -11,7 +12,7 @@ use super::tree::{RelConstraint, TreeEvent, Who, point};
 use super::{Action, Central, LinkId};
 
 /// A goal or command known to central.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub(super) struct Task {
     /// The message as sent; `node` is filled in when it is delivered.
     pub(super) envelope: Envelope,
@@ -472,6 +473,14 @@ impl Central {
         if !tell {
             return;
         }
+        if task.notify {
+            // Told now if its sender is here; asked for later if it was away.
+            let sender = task.sender.clone();
+            self.ends.ended(id, sender, outcome.clone());
+        }
+        let Some(task) = self.tasks.get(&id) else {
+            return;
+        };
         let Some(link) = self.modules.get(&task.sender).and_then(|m| m.link) else {
             return;
         };

@@ -870,3 +870,70 @@ fn a_task_sent_from_a_killed_task_is_not_started() {
     assert!(err.to_string().contains("no longer live"), "{err}");
     assert_eq!(h.central.live_nodes(), 0);
 }
+
+#[test]
+fn a_sender_that_was_away_learns_how_its_watched_tasks_stand() {
+    let mut h = Harness::new();
+    h.connect(1, "ctl", 1);
+    h.register::<Target>(1, "ctl", "moveBase", Class::Command, false);
+    h.connect(2, "gait", 1);
+    let mut watched = h.envelope(2, "gait", Class::Command, "moveBase", target(1.0));
+    watched.options.notify = true;
+    let sent = h.send(2, &watched);
+    assert!(sent.iter().any(|(l, e)| *l == 1 && e.id == watched.id));
+    let mut live = h.envelope(2, "gait", Class::Command, "moveBase", target(2.0));
+    live.options.notify = true;
+    h.send(2, &live);
+    // The sender goes away; its first task ends meanwhile (its end cannot be told).
+    h.step(Event::Closed(2));
+    let sent = h.done(1, "ctl", &watched, true);
+    assert!(
+        !sent
+            .iter()
+            .any(|(_, e)| e.name.as_str() == names::TASK_ENDED),
+        "{sent:?}"
+    );
+    // It comes back on another link and asks.
+    h.connect(3, "gait", 1);
+    let never = MessageId::new(2, 999);
+    let ask = control::TaskStatusRequest {
+        tasks: vec![watched.id, live.id, never],
+    };
+    let request = h.envelope(
+        3,
+        "gait",
+        Class::Control,
+        names::TASK_STATUS,
+        encode_data(&ask).unwrap(),
+    );
+    let sent = h.send(3, &request);
+    let reply = sent
+        .iter()
+        .find(|(l, e)| *l == 3 && e.correlation == Some(request.id))
+        .expect("answered");
+    let status: Vec<control::TaskStatus> = decode_data(&reply.1.data).unwrap();
+    let states: Vec<control::TaskState> = status.into_iter().map(|s| s.state).collect();
+    assert_eq!(
+        states,
+        vec![
+            control::TaskState::Ended(TaskOutcome::Achieved),
+            control::TaskState::Live,
+            control::TaskState::Unknown
+        ]
+    );
+    // Another module cannot learn of them.
+    let request = h.envelope(
+        1,
+        "ctl",
+        Class::Control,
+        names::TASK_STATUS,
+        encode_data(&ask).unwrap(),
+    );
+    let sent = h.send(1, &request);
+    let status: Vec<control::TaskStatus> = decode_data(&sent[0].1.data).unwrap();
+    assert!(
+        status
+            .iter()
+            .all(|s| s.state == control::TaskState::Unknown)
+    );
+}

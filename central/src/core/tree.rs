@@ -54,7 +54,7 @@ pub(super) fn point(p: TimePoint) -> Point {
 }
 
 /// The task tree with logging.
-#[derive(Default)]
+#[derive(Default, serde::Serialize, serde::Deserialize)]
 pub(super) struct Tree {
     tree: TaskTree,
 }

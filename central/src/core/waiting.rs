@@ -8,7 +8,7 @@ use tca_messages::{Class, Envelope, MessageName, ModuleName, RouteError};
 use super::{Action, Central};
 
 /// A query, inform or exception held for a module that is down.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct Waiting {
     pub(super) envelope: Envelope,
     /// Since when it has waited for a module that is down.
@@ -181,12 +181,13 @@ impl Central {
     pub(super) fn expire_waiting(&mut self, out: &mut Vec<Action>) {
         let limit = self.config.max_wait.as_nanos() as u64;
         let now = self.now;
-        let down: Vec<ModuleName> = self
+        let mut down: Vec<ModuleName> = self
             .modules
             .iter()
             .filter(|(_, m)| m.link.is_none())
             .map(|(n, _)| n.clone())
             .collect();
+        down.sort_unstable();
         for module in down {
             let mut expired = Vec::new();
             let mut expired_tasks = Vec::new();

@@ -10,6 +10,12 @@
 //! its link close, it is started again. Every walk must reach its goal without a collision;
 //! at the end the log is audited ([`tca_logs::audit`]): no message lost, none handled twice.
 //!
+//! With [`ChaosOptions::kill_central`] the victim is central itself: it runs as its own process
+//! (`tca central --journal`), is killed with `SIGKILL` at random moments of the walks and started
+//! again at once on the same journal; the walker waits through each restart and never sends
+//! its walk again. The logs of every central, read in order, are audited as one history, and
+//! each walk must have been sent once.
+//!
 //! # Layout
 //!
 //! - this file: [`ChaosOptions`], [`run`] (the walks, the kills, the audit), the
@@ -61,6 +67,8 @@ pub struct ChaosOptions {
     pub victims: Vec<String>,
     /// Plan the next step while the current one executes.
     pub concurrent: bool,
+    /// Kill central (a process on a journal) instead of the modules.
+    pub kill_central: bool,
 }
 
 /// One kill.
@@ -110,10 +118,15 @@ pub struct ChaosReport {
     pub audit: Audit,
     /// The log's time check.
     pub time: tca_logs::TimeCheck,
-    /// The log.
+    /// The log (the last central's, when central was killed).
     pub log: PathBuf,
-    /// Every walk reached its goal with no collision, the kills were made, the audit is clean
-    /// and time was kept.
+    /// Every central's log, in order (one, unless central was killed and restarted).
+    pub logs: Vec<PathBuf>,
+    /// `walk` goals the walker sent, in all the logs: one per walk (a walk is never sent
+    /// again).
+    pub walk_goals: usize,
+    /// Every walk reached its goal with no collision and was sent once, the kills were made,
+    /// the audit is clean and time was kept.
     pub passed: bool,
     /// Wall-clock seconds of the whole run.
     pub wall_time_s: f64,
@@ -138,29 +151,46 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
             WALKING_MODULES.join(", ")
         );
     }
+    if options.kill_central && !options.victims.is_empty() {
+        anyhow::bail!(
+            "--victims names modules to kill; with --kill-central central is the one killed"
+        );
+    }
     std::fs::create_dir_all(&options.out)
         .with_context(|| format!("cannot create {}", options.out.display()))?;
     let log = options.out.join("traffic.mcap");
     tca_logs::set_aside(&log).context("cannot keep the previous log")?;
+    let earlier_logs = numbered_logs(&log);
     let endpoint = match &options.listen {
         Some(e) => e.clone(),
         None => tca_link::net::free_loopback_endpoint().context("no free loopback port")?,
     };
-    let central = tca_central::start(StartOptions {
-        log: Some(log.clone()),
-        listen: vec![endpoint.clone()],
-        config: tca_central::CentralConfig {
-            simulated_time: true,
-            ..tca_central::CentralConfig::default()
-        },
-        ..StartOptions::default()
-    })
-    .await
-    .context("cannot start central")?;
-    let watcher = Module::builder(format!("chaos-{}", std::process::id()))
-        .connect(&Connector::from(central.in_process()))
-        .await
-        .context("cannot watch central")?;
+    let mut central = if options.kill_central {
+        let journal = options.out.join("central.journal");
+        let stderr = options.out.join("central.stderr");
+        CentralRun::Process(ModuleProcess::central(
+            &options.exe,
+            &endpoint,
+            &log,
+            &journal,
+            &stderr,
+        )?)
+    } else {
+        CentralRun::InProcess(
+            tca_central::start(StartOptions {
+                log: Some(log.clone()),
+                listen: vec![endpoint.clone()],
+                config: tca_central::CentralConfig {
+                    simulated_time: true,
+                    ..tca_central::CentralConfig::default()
+                },
+                ..StartOptions::default()
+            })
+            .await
+            .context("cannot start central")?,
+        )
+    };
+    let watcher = watch_central(&central, &endpoint).await?;
     let setup = ProcessSetup {
         exe: options.exe.clone(),
         endpoint: endpoint.clone(),
@@ -181,7 +211,15 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
     while w < options.walks || (kills.len() < options.kills && w < 2 * options.walks) {
         let wanted = per_walk.min(options.kills.saturating_sub(kills.len()));
         let (record, made) = one_walk(
-            w, wanted, options, &setup, &watcher, &endpoint, &mut rng, &say,
+            w,
+            wanted,
+            options,
+            &setup,
+            &watcher,
+            &endpoint,
+            &mut rng,
+            &mut central,
+            &say,
         )
         .await?;
         say(format!(
@@ -207,13 +245,32 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
         w += 1;
     }
     watcher.close().await;
-    central.shutdown().await.context("central did not stop")?;
-    let recorded = tca_logs::LogFile::open(&log)
-        .with_context(|| format!("cannot read the log {}", log.display()))?;
+    match central {
+        CentralRun::InProcess(c) => {
+            c.shutdown().await.context("central did not stop")?;
+        }
+        CentralRun::Process(mut p) => p.stop().await,
+    }
+    // The crashed centrals' logs (set aside by each restart), then the last one's.
+    let mut logs: Vec<PathBuf> = numbered_logs(&log)
+        .into_iter()
+        .filter(|l| !earlier_logs.contains(l))
+        .collect();
+    logs.push(log.clone());
+    let mut read = Vec::new();
+    for l in &logs {
+        read.push(
+            tca_logs::LogFile::open(l)
+                .with_context(|| format!("cannot read the log {}", l.display()))?,
+        );
+    }
+    let recorded = tca_logs::LogFile::chain(read);
     let audit = tca_logs::audit(&recorded);
     let time = tca_logs::time_check(&recorded);
+    let walk_goals = walk_goals_sent(&recorded);
     let passed = walks.iter().all(|w| w.reached && w.collisions == 0)
         && kills.len() >= options.kills
+        && walk_goals == walks.len()
         && audit.is_clean()
         && time.holds();
     Ok(ChaosReport {
@@ -222,12 +279,72 @@ pub async fn run(options: &ChaosOptions, say: impl Fn(String)) -> anyhow::Result
         audit,
         time,
         log,
+        logs,
+        walk_goals,
         passed,
         wall_time_s: started.elapsed().as_secs_f64(),
     })
 }
 
-/// Walks once with fresh module processes, making up to `wanted` kills.
+/// Central, in this process or as its own (to be killed).
+enum CentralRun {
+    InProcess(tca_central::RunningCentral),
+    Process(ModuleProcess),
+}
+
+/// A module of this process that asks central for its registry (over zenoh when central is a
+/// process: it rejoins central's restarts by itself).
+async fn watch_central(central: &CentralRun, endpoint: &str) -> anyhow::Result<Module> {
+    let name = format!("chaos-{}", std::process::id());
+    let connector = match central {
+        CentralRun::InProcess(c) => Connector::from(c.in_process()),
+        CentralRun::Process(_) => Connector::zenoh(endpoint.to_owned()),
+    };
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        match Module::builder(name.clone()).connect(&connector).await {
+            Ok(m) => return Ok(m),
+            Err(e) if Instant::now() > deadline => {
+                return Err(e).context("cannot watch central");
+            }
+            Err(_) => tokio::time::sleep(Duration::from_millis(100)).await,
+        }
+    }
+}
+
+/// The logs `STEM.N.EXT` next to `log`, by N.
+fn numbered_logs(log: &std::path::Path) -> Vec<PathBuf> {
+    let stem = log
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = log
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut found: Vec<(u32, PathBuf)> = (1..100_000u32)
+        .map(|n| (n, log.with_file_name(format!("{stem}.{n}.{ext}"))))
+        .take_while(|(_, p)| p.exists())
+        .collect();
+    found.sort();
+    found.into_iter().map(|(_, p)| p).collect()
+}
+
+/// How many `walk` goals modules sent central.
+fn walk_goals_sent(log: &tca_logs::LogFile) -> usize {
+    log.records
+        .iter()
+        .filter(|r| {
+            matches!(&r.kind, tca_logs::RecordKind::Frame(f)
+                if f.direction == tca_logs::Direction::In
+                    && f.class == tca_messages::Class::Goal
+                    && f.name.as_str() == "walk")
+        })
+        .count()
+}
+
+/// Walks once with fresh module processes, making up to `wanted` kills (of modules, or of
+/// `central` when it is a process).
 #[allow(clippy::too_many_arguments)]
 async fn one_walk(
     w: usize,
@@ -237,6 +354,7 @@ async fn one_walk(
     watcher: &Module,
     endpoint: &str,
     rng: &mut ChaCha8Rng,
+    central: &mut CentralRun,
     say: &impl Fn(String),
 ) -> anyhow::Result<(WalkRecord, Vec<KillRecord>)> {
     let started = Instant::now();
@@ -267,11 +385,13 @@ async fn one_walk(
             options.victims.is_empty() || options.victims.iter().any(|v| v == WALKING_MODULES[*i])
         })
         .collect();
+    // Central is killed at any moment of a step: while it is planned, or the leg moves.
+    let most_delay = if options.kill_central { 400 } else { 40u64 };
     let mut plan: Vec<(usize, u64, usize)> = (0..wanted)
         .map(|_| {
             (
                 rng.random_range(0..=KILL_WINDOW_STEPS),
-                rng.random_range(0..=40u64),
+                rng.random_range(0..=most_delay),
                 victims[rng.random_range(0..victims.len())],
             )
         })
@@ -318,14 +438,19 @@ async fn one_walk(
                     if walk.is_finished() {
                         break;
                     }
-                    let kill = kill_and_restart(&mut modules[which], watcher).await?;
+                    let (victim, kill) = match central {
+                        CentralRun::Process(c) => (c.name.clone(), kill_central(c).await?),
+                        CentralRun::InProcess(_) => (
+                            modules[which].name.clone(),
+                            kill_and_restart(&mut modules[which], watcher).await?,
+                        ),
+                    };
                     say(format!(
-                        "walk {w}: killed {} after step {steps} (+{delay} ms), started again after {} ms",
-                        modules[which].name, kill
+                        "walk {w}: killed {victim} after step {steps} (+{delay} ms), started again after {kill} ms",
                     ));
                     made.push(KillRecord {
                         walk: w,
-                        module: modules[which].name.clone(),
+                        module: victim,
                         after_step: steps,
                         delay_ms: delay,
                         restarted_after_ms: kill,
@@ -377,6 +502,15 @@ async fn kill_and_restart(module: &mut ModuleProcess, watcher: &Module) -> anyho
     Ok(killed.elapsed().as_millis() as u64)
 }
 
+/// Kills central with SIGKILL and starts it again at once on its journal; returns the
+/// milliseconds between kill and restart.
+async fn kill_central(central: &mut ModuleProcess) -> anyhow::Result<u64> {
+    let killed = Instant::now();
+    central.kill().await;
+    central.restart()?;
+    Ok(killed.elapsed().as_millis() as u64)
+}
+
 /// Polls central's registry until `ok` holds for it.
 async fn wait_until(
     watcher: &Module,
@@ -385,12 +519,19 @@ async fn wait_until(
 ) -> anyhow::Result<()> {
     let deadline = Instant::now() + limit;
     loop {
-        let registry = watcher.registry().await?;
-        if ok(&registry) {
+        // A central being restarted does not answer: ask again once it is back.
+        let registry = match watcher.registry().await {
+            Ok(r) => Some(r),
+            Err(tca_module::ModuleError::CentralLost) => None,
+            Err(e) => return Err(e.into()),
+        };
+        if registry.as_ref().is_some_and(&ok) {
             return Ok(());
         }
         if Instant::now() > deadline {
-            let connected: Vec<String> = registry.modules.iter().map(|m| m.to_string()).collect();
+            let connected: Vec<String> = registry
+                .map(|r| r.modules.iter().map(|m| m.to_string()).collect())
+                .unwrap_or_else(|| vec!["(central is away)".into()]);
             anyhow::bail!("timed out; connected now: {}", connected.join(", "));
         }
         tokio::time::sleep(Duration::from_millis(10)).await;
@@ -416,11 +557,21 @@ pub fn summary(report: &ChaosReport) -> String {
             .join(", "),
         report.wall_time_s
     );
+    s.push_str(&format!(
+        "{} walk goal(s) sent for {} walk(s)\n",
+        report.walk_goals,
+        report.walks.len()
+    ));
     s.push_str(&report.audit.text());
     s.push_str(&report.time.text());
     s.push_str(&format!(
         "log: {}\n{}\n",
-        report.log.display(),
+        report
+            .logs
+            .iter()
+            .map(|l| l.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" "),
         if report.passed { "PASSED" } else { "FAILED" }
     ));
     s

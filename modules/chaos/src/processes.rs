@@ -1,4 +1,5 @@
-//! The walking modules as child processes that can be killed and started again.
+//! The walking modules (and, when it is the one killed, central) as child processes that can be
+//! killed and started again.
 
 use std::path::{Path, PathBuf};
 use std::process::Stdio;
@@ -24,14 +25,16 @@ pub struct ProcessSetup {
     pub compute: &'static str,
 }
 
-/// One walking module's process.
+/// One walking module's process, or central's.
 #[derive(Debug)]
 pub struct ModuleProcess {
-    /// The module's name (`controller`, `ism`, ...).
+    /// The module's name (`controller`, `ism`, ...), or `central`.
     pub name: String,
     args: Vec<String>,
     exe: PathBuf,
     child: Option<Child>,
+    /// Where its standard error goes (appended), if anywhere.
+    stderr: Option<PathBuf>,
 }
 
 impl ModuleProcess {
@@ -58,17 +61,58 @@ impl ModuleProcess {
             args,
             exe: setup.exe.clone(),
             child: None,
+            stderr: None,
+        };
+        process.spawn()?;
+        Ok(process)
+    }
+
+    /// Starts central as its own process on `endpoint`, on the simulated clock, logging to
+    /// `log` and keeping its journal in `journal` (so that it can be killed and started again);
+    /// what it says goes to `stderr` (appended).
+    pub fn central(
+        exe: &Path,
+        endpoint: &str,
+        log: &Path,
+        journal: &Path,
+        stderr: &Path,
+    ) -> anyhow::Result<Self> {
+        let mut process = ModuleProcess {
+            name: "central".into(),
+            args: vec![
+                "central".into(),
+                "--listen".into(),
+                endpoint.into(),
+                "--log".into(),
+                log.display().to_string(),
+                "--journal".into(),
+                journal.display().to_string(),
+                "--simulated-time".into(),
+            ],
+            exe: exe.to_owned(),
+            child: None,
+            stderr: Some(stderr.to_owned()),
         };
         process.spawn()?;
         Ok(process)
     }
 
     fn spawn(&mut self) -> anyhow::Result<()> {
+        let stderr = match &self.stderr {
+            Some(path) => Stdio::from(
+                std::fs::OpenOptions::new()
+                    .create(true)
+                    .append(true)
+                    .open(path)
+                    .with_context(|| format!("cannot open {}", path.display()))?,
+            ),
+            None => Stdio::null(),
+        };
         let child = Command::new(&self.exe)
             .args(&self.args)
             .stdin(Stdio::null())
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
+            .stderr(stderr)
             .kill_on_drop(true)
             .spawn()
             .with_context(|| format!("cannot start module {}", self.name))?;

@@ -249,6 +249,7 @@ impl ModuleBuilder {
                 max_frame_bytes: self.max_frame_bytes,
                 sim_time: self.sim_time,
                 central_clock: welcome.simulated_clock,
+                journal: welcome.journal,
             },
             link.sender,
             link.keep,

@@ -2,10 +2,12 @@
 //!
 //! A module over zenoh watches central's liveliness token. When the token is withdrawn, central
 //! is gone (its process was killed, or the network dropped): the module goes *offline*. What
-//! was in flight is lost with central, so the module fails its waiting queries and task
-//! watchers at once with [`ModuleError::CentralLost`](crate::ModuleError::CentralLost), stops
-//! its running handlers (their ends would mean nothing to a new central), and refuses new
-//! sends with the same error. Its zenoh session meanwhile keeps trying to reach the router,
+//! was in flight is lost with central, so the module fails its waiting queries at once with
+//! [`ModuleError::CentralLost`](crate::ModuleError::CentralLost), stops its running handlers
+//! (a central that comes back delivers their goals again, marked as redeliveries, or has
+//! forgotten them), and refuses new sends with the same error. Its task watchers (the ends of
+//! goals and commands it sent, awaited) fail the same way, unless central keeps a journal (its
+//! welcome named one): then they wait for the central that comes back. Its zenoh session meanwhile keeps trying to reach the router,
 //! backing off (see `tca_link::zenoh::RETRY_PERIOD_INIT_MS`).
 //!
 //! Over the local link the same happens when central's socket ends (EOF): the link says
@@ -16,6 +18,12 @@
 //! when central welcomes it, it is *online* again and serves as before. Until then it repeats
 //! its hello with exponential backoff ([`FIRST_RETRY`] doubling up to [`LONGEST_RETRY`]) in case
 //! a hello was lost while the new central was starting.
+//!
+//! A central that welcomes it back with the same journal id restored the tasks of the one that
+//! went away: the module asks it what became of the tasks its watchers wait for
+//! (`tca.taskStatus`), delivers the ends told while it was away, fails those central never
+//! received with `CentralLost`, and lets the live ones wait on. A central with another journal,
+//! or none, knows nothing of them: they fail with `CentralLost`.
 
 use std::time::Duration;
 
@@ -67,6 +75,9 @@ pub(crate) struct Rejoiner {
     /// Envelopes central sent between its welcome and the registration's answer: handled
     /// once the module is online again, never dropped.
     held: Vec<Envelope>,
+    /// The central being rejoined keeps the journal of the one that went away: once online,
+    /// ask it what became of the tasks the module waits for.
+    resume: bool,
 }
 
 /// What the receive loop should do with an envelope after the rejoiner saw it.
@@ -88,6 +99,7 @@ impl Rejoiner {
             greeting,
             phase: Phase::Online,
             held: Vec::new(),
+            resume: false,
         }
     }
 
@@ -163,6 +175,7 @@ impl Rejoiner {
                 };
                 module.set_link(welcome.link);
                 module.set_central_clock(welcome.simulated_clock);
+                self.resume = module.rejoined(welcome.journal);
                 let id = module.next_id();
                 match self.send(module, &self.greeting.register, id) {
                     Ok(()) => {
@@ -189,6 +202,10 @@ impl Rejoiner {
                         tracing::info!(module = %module.name(), link = id.link(), "rejoined central: registered again");
                         self.phase = Phase::Online;
                         module.go_online();
+                        if std::mem::take(&mut self.resume) {
+                            let module = module.clone();
+                            tokio::spawn(async move { module.resume_watchers().await });
+                        }
                         Verdict::Online(std::mem::take(&mut self.held))
                     }
                     Ok(outcome) => Verdict::Refused(

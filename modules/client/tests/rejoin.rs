@@ -162,3 +162,86 @@ async fn in_process_modules_never_go_offline() {
     let err = server.goal(&Park).unwrap_err();
     assert!(matches!(err, ModuleError::Disconnected), "{err:?}");
 }
+
+/// Resume: a goal whose first delivery never ends and whose redelivery ends at once.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Resume;
+tca_messages::message!(Resume: goal "resume");
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_watched_goal_survives_a_crash_of_a_central_that_keeps_a_journal() {
+    journaled_crash(&unique_local_endpoint()).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_watched_goal_survives_a_crash_of_a_central_that_keeps_a_journal_over_zenoh() {
+    journaled_crash(&free_endpoint()).await;
+}
+
+/// Central on a journal crashes while a goal runs; a central started on the same journal
+/// delivers the goal again, marked, and the sender's watcher, which waited, gets its end.
+async fn journaled_crash(endpoint: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let options = StartOptions {
+        listen: vec![endpoint.to_owned()],
+        journal: Some(dir.path().join("central.journal")),
+        ..StartOptions::default()
+    };
+    let central = tca_central::start(options.clone()).await.unwrap();
+    assert!(central.restored().is_none(), "a fresh journal");
+    let connector = Connector::endpoint(endpoint);
+    let (tx, mut deliveries) = tokio::sync::mpsc::unbounded_channel();
+    let server = within(
+        "server connects",
+        Module::builder("server")
+            .handle(move |ctx, _r: Resume| {
+                let _ = tx.send(ctx.redelivery());
+                async move {
+                    if ctx.redelivery() == 0 {
+                        std::future::pending::<()>().await;
+                    }
+                    Ok(())
+                }
+            })
+            .connect(&connector),
+    )
+    .await
+    .unwrap();
+    let client = within(
+        "client connects",
+        Module::builder("client").connect(&connector),
+    )
+    .await
+    .unwrap();
+    let resumed = client.send_watched(&Resume, []).unwrap();
+    let first = within("first delivery", deliveries.recv()).await;
+    assert_eq!(first, Some(0));
+
+    central.crash().await;
+    tokio::time::timeout(Duration::from_secs(2), async {
+        while client.is_online() || server.is_online() {
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+    })
+    .await
+    .expect("both modules see central gone within 2 s");
+
+    let central = tca_central::start(options).await.unwrap();
+    let restored = central.restored().expect("restored from the journal");
+    assert!(
+        restored.summary.contains("1 live task node"),
+        "{}",
+        restored.summary
+    );
+    assert!(server.wait_online(STEP).await && client.wait_online(STEP).await);
+    let again = within("delivered again", deliveries.recv()).await;
+    assert_eq!(again, Some(1), "the redelivery is marked");
+    let outcome = within("the watcher gets the end", resumed.outcome()).await;
+    assert_eq!(
+        outcome.unwrap(),
+        tca_messages::control::TaskOutcome::Achieved
+    );
+    // A clean stop ends the journal: the next central starts afresh.
+    central.shutdown().await.unwrap();
+    assert!(!dir.path().join("central.journal").exists());
+}

@@ -80,6 +80,7 @@ async fn start(config: CentralConfig, zenoh: bool, log: Option<&Path>) -> (Runni
             vec![]
         },
         insecure: false,
+        ..StartOptions::default()
     })
     .await
     .unwrap();
@@ -284,6 +285,7 @@ async fn start_local(config: CentralConfig) -> (RunningCentral, String) {
         log: None,
         listen: vec![endpoint.clone()],
         insecure: false,
+        ..StartOptions::default()
     })
     .await
     .unwrap();

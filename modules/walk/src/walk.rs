@@ -25,6 +25,10 @@ pub const DEFAULT_GOAL_Y_M: f64 = 9.5;
 /// A walk is over at the latest after this much wall time.
 pub const WALK_TIMEOUT: Duration = Duration::from_secs(900);
 
+/// How long the walker waits for a central that went away to be back (on its journal, the
+/// walk goes on) before it gives up.
+pub const CENTRAL_PATIENCE: Duration = Duration::from_secs(120);
+
 /// What to walk.
 #[derive(Clone, Debug)]
 pub struct WalkOptions {
@@ -208,7 +212,11 @@ pub async fn walk(
         .await
         .context("the walker cannot join central")?;
 
-    let start_y = walker.query(&BodyPosition).await?.y_m;
+    // Positions and status are only read: asked again if central restarts meanwhile.
+    let start_y = walker
+        .query_through_restarts(&BodyPosition, CENTRAL_PATIENCE)
+        .await?
+        .y_m;
     let mut goals = vec![goal];
     if options.backward {
         goals.push(start_y);
@@ -216,18 +224,26 @@ pub async fn walk(
     let mut legs = Vec::new();
     let mut footfalls = Vec::new();
     for g in goals {
-        let from = walker.query(&BodyPosition).await?.y_m;
+        let from = walker
+            .query_through_restarts(&BodyPosition, CENTRAL_PATIENCE)
+            .await?
+            .y_m;
         let _ = progress.send(Progress::Leg {
             goal_y_m: g,
             from_y_m: from,
         });
-        let task = walker.send_watched(
-            &Walk {
-                goal_y_m: g,
-                mode: options.mode,
-            },
-            [],
-        )?;
+        let walk_goal = Walk {
+            goal_y_m: g,
+            mode: options.mode,
+        };
+        // Refused while central is away (nothing was sent): sent once it is back.
+        let task = loop {
+            match walker.send_watched(&walk_goal, []) {
+                Err(tca_module::ModuleError::CentralLost)
+                    if walker.wait_online(CENTRAL_PATIENCE).await => {}
+                other => break other?,
+            }
+        };
         let outcome = walker
             .unless_interrupted(
                 task.id(),
@@ -243,10 +259,11 @@ pub async fn walk(
             .map_err(|_| anyhow::anyhow!("the walk did not end within {WALK_TIMEOUT:?}"))?
             .map_err(|e| match e {
                 tca_module::ModuleError::CentralLost => anyhow::anyhow!(
-                    "central went away during the walk; the leg stands where it stopped. Start \
-                     central again on the same endpoint (the modules register again by \
-                     themselves), then run the same `tca walk --connect` again: it walks on \
-                     from where the leg stands"
+                    "central went away during the walk and came back without it (a central \
+                     started with --journal FILE comes back with its walks, and they go on by \
+                     themselves); the leg stands where it stopped. Start central again on the \
+                     same endpoint (the modules register again by themselves), then run the \
+                     same `tca walk --connect` again: it walks on from where the leg stands"
                 ),
                 other => other.into(),
             })?;
@@ -255,7 +272,10 @@ pub async fn walk(
             footfalls.push(s.footfall);
             steps += 1;
         }
-        let now_y = walker.query(&BodyPosition).await?.y_m;
+        let now_y = walker
+            .query_through_restarts(&BodyPosition, CENTRAL_PATIENCE)
+            .await?
+            .y_m;
         let (reached, reason) = match outcome {
             TaskOutcome::Achieved if (now_y - g).abs() <= 0.05 => (true, None),
             TaskOutcome::Achieved => (
@@ -278,8 +298,13 @@ pub async fn walk(
             break; // the leg stands where it stopped, safely
         }
     }
-    let status = walker.query(&ControllerStatus).await?;
-    let final_y = walker.query(&BodyPosition).await?.y_m;
+    let status = walker
+        .query_through_restarts(&ControllerStatus, CENTRAL_PATIENCE)
+        .await?;
+    let final_y = walker
+        .query_through_restarts(&BodyPosition, CENTRAL_PATIENCE)
+        .await?
+        .y_m;
     let sim_time_s = walker.time_ns() as f64 / 1e9;
     let wall_time_s = started.elapsed().as_secs_f64();
     let mut report = WalkReport {

@@ -8,6 +8,8 @@
 //!                                   # (the first local endpoint of listen, else a private
 //!                                   # local/up-<pid> added for them); false: listen[0]
 //! log = "out/traffic.mcap"          # optional traffic log
+//! journal = "out/central.journal"   # optional: after a crash, central comes back with its
+//!                                   # task trees and queues (see tca central --journal)
 //! policy = "policy.toml"            # optional: who may connect and what they may do
 //! simulated_time = true             # optional: central keeps the simulated clock
 //! insecure = true                   # optional: allow a network endpoint with no policy
@@ -53,6 +55,9 @@ pub struct CentralSection {
     pub local_modules: bool,
     /// Traffic log file.
     pub log: Option<PathBuf>,
+    /// Journal file, as `tca central --journal`: a central restarted after a crash comes back
+    /// with its task trees and queues.
+    pub journal: Option<PathBuf>,
     /// Policy file (authentication, authorisation, limits), as `tca central --policy`.
     pub policy: Option<PathBuf>,
     /// Keep the system's simulated clock, as `tca central --simulated-time`.
@@ -70,6 +75,7 @@ impl Default for CentralSection {
             listen: default_listen(),
             local_modules: true,
             log: None,
+            journal: None,
             policy: None,
             simulated_time: false,
             insecure: false,

@@ -98,6 +98,8 @@ pub async fn up(launch: &Launch, exe: &Path) -> Result<Up, LaunchError> {
             simulated_time: launch.central.simulated_time,
             ..CentralConfig::default()
         },
+        journal: launch.central.journal.clone(),
+        previous_log: kept_log.clone(),
     })
     .await?;
     tracing::info!(endpoints = ?listen, modules = %endpoint, "central listening");

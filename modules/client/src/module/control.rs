@@ -7,7 +7,7 @@ use std::time::Duration;
 use serde::de::DeserializeOwned;
 use tca_messages::control::{
     Constrain, ControlRequest, Kill, KillTask, Monitor, MonitorAction, OnException, Registry,
-    Retry, Tap, TreeView,
+    Retry, Tap, TaskState, TaskStatus, TaskStatusRequest, TreeView,
 };
 use tca_messages::{
     Class, ConstraintSpec, Envelope, Message, MessageId, MessageName, NodeId, decode_data,
@@ -212,12 +212,68 @@ impl Module {
         self.shared.closed.load(Ordering::Relaxed)
     }
 
-    /// Central is gone: what was in flight went with it. Waiting queries and task watchers fail
-    /// with [`ModuleError::CentralLost`], running handlers stop, new sends are refused until
-    /// the module has rejoined.
+    /// Central is gone: what was in flight went with it. Waiting queries fail with
+    /// [`ModuleError::CentralLost`], running handlers stop, new sends are refused until the
+    /// module has rejoined. Task watchers fail too, unless central keeps a journal: then they
+    /// wait for the central that comes back on it (see [`Module::rejoined`]).
     pub(crate) fn go_offline(&self) {
         self.shared.online.store(false, Ordering::Relaxed);
-        super::receive::fail_in_flight(&self.shared, || ModuleError::CentralLost);
+        if lock(&self.shared.journal).is_none() {
+            super::receive::fail_watchers(&self.shared, &|| ModuleError::CentralLost);
+        }
+        super::receive::fail_all_but_watchers(&self.shared);
+    }
+
+    /// A central welcomed the module back, keeping `journal`. If it is the journal of the
+    /// central the module's task watchers were waiting on, they wait on (see
+    /// [`Module::resume_watchers`]); otherwise what they waited for was lost with the old
+    /// central, and they fail with [`ModuleError::CentralLost`].
+    pub(crate) fn rejoined(&self, journal: Option<u64>) -> bool {
+        let before = std::mem::replace(&mut *lock(&self.shared.journal), journal);
+        let same = before.is_some() && before == journal;
+        if !same {
+            super::receive::fail_watchers(&self.shared, &|| ModuleError::CentralLost);
+        }
+        same
+    }
+
+    /// Asks the central rejoined on the same journal what became of the tasks this module
+    /// waits for: ends told while it was away are delivered now, tasks central never received
+    /// fail with [`ModuleError::CentralLost`], live ones wait on for their end.
+    pub(crate) async fn resume_watchers(&self) {
+        let tasks: Vec<MessageId> = lock(&self.shared.watchers).keys().copied().collect();
+        if tasks.is_empty() {
+            return;
+        }
+        let request = ControlRequest::TaskStatus(TaskStatusRequest {
+            tasks: tasks.clone(),
+        });
+        let statuses: Vec<TaskStatus> = match self.control(request).await {
+            Ok(s) => s,
+            Err(ModuleError::CentralLost) => return, // asked again when it is back
+            Err(e) => {
+                tracing::warn!(module = %self.name(), error = %e, "central cannot say what became of the tasks this module waits for; they are given up");
+                let mut watchers = lock(&self.shared.watchers);
+                for id in tasks {
+                    if let Some(w) = watchers.remove(&id) {
+                        let _ = w.send(Err(ModuleError::CentralLost));
+                    }
+                }
+                return;
+            }
+        };
+        let mut watchers = lock(&self.shared.watchers);
+        for status in statuses {
+            let outcome = match status.state {
+                TaskState::Live => continue,
+                TaskState::Ended(outcome) => Ok(outcome),
+                TaskState::Unknown => Err(ModuleError::CentralLost),
+            };
+            tracing::info!(module = %self.name(), task = %status.task, ?outcome, "a task this module waits for ended while central was away, or never reached it");
+            if let Some(w) = watchers.remove(&status.task) {
+                let _ = w.send(outcome);
+            }
+        }
     }
 
     /// Registered again with a new central.

@@ -71,6 +71,10 @@ pub(crate) struct Shared {
     closed_signal: tokio::sync::watch::Sender<bool>,
     /// Changes when the module rejoins a restarted central.
     online_signal: tokio::sync::watch::Sender<bool>,
+    /// The journal central keeps its tasks in, as its latest welcome said (see
+    /// [`crate::rejoin`]): while it is the same, the ends of tasks this module waits for
+    /// survive central's restarts.
+    journal: Mutex<Option<u64>>,
     /// Keeps the transport open while any handle lives (taken by [`Module::abort_link`]).
     keep: Mutex<Option<Box<dyn std::any::Any + Send>>>,
 }
@@ -86,6 +90,7 @@ pub(crate) struct Settings {
     pub(crate) max_frame_bytes: usize,
     pub(crate) sim_time: bool,
     pub(crate) central_clock: bool,
+    pub(crate) journal: Option<u64>,
 }
 
 /// A module connected to central. Cheap to clone; the connection closes when the last clone
@@ -214,6 +219,7 @@ impl Module {
                 handling: HandlingClock::new(),
                 closed_signal: tokio::sync::watch::channel(false).0,
                 online_signal: tokio::sync::watch::channel(true).0,
+                journal: Mutex::new(settings.journal),
                 keep: Mutex::new(Some(keep)),
             }),
             context: None,

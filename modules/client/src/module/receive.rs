@@ -236,10 +236,20 @@ impl Module {
 
 /// Fails every waiting query (dropping its sender), task watcher and running handler.
 pub(super) fn fail_in_flight(shared: &Shared, error: impl Fn() -> ModuleError) {
-    lock(&shared.pending).clear();
+    fail_watchers(shared, &error);
+    fail_all_but_watchers(shared);
+}
+
+/// Fails every task watcher.
+pub(super) fn fail_watchers(shared: &Shared, error: &impl Fn() -> ModuleError) {
     for (_, w) in lock(&shared.watchers).drain() {
         let _ = w.send(Err(error()));
     }
+}
+
+/// Fails every waiting query and stops every running handler; ends the tap.
+pub(super) fn fail_all_but_watchers(shared: &Shared) {
+    lock(&shared.pending).clear();
     for (_, h) in lock(&shared.running).drain() {
         h.abort();
     }

@@ -21,6 +21,26 @@ impl Module {
             .await
     }
 
+    /// Like [`Module::query`], but a query lost with central (it went away before answering) is
+    /// asked again once the module has rejoined a central, as long as that takes at most
+    /// `patience` each time: for queries that only read the world, which may be asked twice.
+    pub async fn query_through_restarts<Q: Message<Kind = kind::Query>>(
+        &self,
+        query: &Q,
+        patience: Duration,
+    ) -> Result<Q::Reply> {
+        loop {
+            match self.query(query).await {
+                Err(ModuleError::CentralLost) => {
+                    if !self.wait_online(patience).await {
+                        return Err(ModuleError::CentralLost);
+                    }
+                }
+                other => return other,
+            }
+        }
+    }
+
     /// Sends a query and waits at most `timeout` for the reply.
     pub async fn query_with_timeout<Q: Message<Kind = kind::Query>>(
         &self,
