@@ -42,6 +42,8 @@ async fn start(policy: String, listen: String, log: &Path) -> RunningCentral {
         log: Some(log.to_owned()),
         listen: vec![listen],
         insecure: false,
+        journal: None,
+        previous_log: None,
     })
     .await
     .unwrap()
