@@ -58,19 +58,26 @@ pub async fn scene_from_telemetry(
             )
         }
     };
-    let pose = module
-        .query(&BodyPose)
-        .await
-        .map_err(|e| format!("cannot ask the body's pose: {e}"))?;
-    let mut posture = Vec::new();
-    let mut stance = Vec::new();
-    for leg in model.legs() {
-        let s = module
+    // Asked all at once: across a delaying bridge the answers come back together, one round
+    // trip for the lot rather than one per question, and nearer one moment of the robot.
+    let legs = model.legs().iter().map(|leg| async move {
+        module
             .query(&LegState {
                 leg: leg.name().to_owned(),
             })
             .await
-            .map_err(|e| format!("cannot ask leg {}'s state: {e}", leg.name()))?;
+            .map_err(|e| format!("cannot ask leg {}'s state: {e}", leg.name()))
+    });
+    let (pose, legs) = futures::future::join(
+        module.query(&BodyPose),
+        futures::future::join_all(legs),
+    )
+    .await;
+    let pose = pose.map_err(|e| format!("cannot ask the body's pose: {e}"))?;
+    let mut posture = Vec::new();
+    let mut stance = Vec::new();
+    for s in legs {
+        let s = s?;
         posture.push(s.joints);
         stance.push(s.stance);
     }
