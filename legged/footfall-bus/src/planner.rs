@@ -68,11 +68,8 @@ pub async fn scene_from_telemetry(
             .await
             .map_err(|e| format!("cannot ask leg {}'s state: {e}", leg.name()))
     });
-    let (pose, legs) = futures::future::join(
-        module.query(&BodyPose),
-        futures::future::join_all(legs),
-    )
-    .await;
+    let (pose, legs) =
+        futures::future::join(module.query(&BodyPose), futures::future::join_all(legs)).await;
     let pose = pose.map_err(|e| format!("cannot ask the body's pose: {e}"))?;
     let mut posture = Vec::new();
     let mut stance = Vec::new();
