@@ -404,7 +404,28 @@ async fn serve(module: tca_module::Module, name: &str, endpoint: &str) -> anyhow
         _ = module.closed() => {
             anyhow::bail!("central closed the link to module {name}");
         }
+        launcher = launcher_gone() => {
+            eprintln!("module {name}: its launcher (process {launcher}) has gone; stopping");
+        }
     }
     module.close().await;
     Ok(ExitCode::SUCCESS)
+}
+
+/// Resolves when this module was started by `tca up` (see [`tca_launch::LAUNCHER_PID_ENV`])
+/// and its parent is no longer that launcher; never otherwise. Returns the launcher's id.
+async fn launcher_gone() -> u32 {
+    let launcher = std::env::var(tca_launch::LAUNCHER_PID_ENV)
+        .ok()
+        .and_then(|v| v.parse::<u32>().ok());
+    let Some(launcher) = launcher else {
+        return std::future::pending().await;
+    };
+    let mut every = tokio::time::interval(std::time::Duration::from_millis(500));
+    loop {
+        every.tick().await;
+        if std::os::unix::process::parent_id() != launcher {
+            return launcher;
+        }
+    }
 }

@@ -14,4 +14,4 @@ pub mod supervise;
 
 pub use error::LaunchError;
 pub use file::{CentralSection, Launch, ModuleSection};
-pub use supervise::{FIRST_PAUSE, HEALTHY_RUN, LONGEST_PAUSE, Up, up};
+pub use supervise::{FIRST_PAUSE, HEALTHY_RUN, LAUNCHER_PID_ENV, LONGEST_PAUSE, Up, up};

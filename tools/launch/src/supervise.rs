@@ -17,6 +17,11 @@ use tokio::task::JoinHandle;
 
 use crate::{Launch, LaunchError, ModuleSection};
 
+/// Set in the environment of every built-in module `tca up` starts: the launcher's process
+/// id. Such a module ends when its parent is no longer that process (the launcher was killed
+/// before it could stop its modules), rather than waiting for a central that will not return.
+pub const LAUNCHER_PID_ENV: &str = "TCA_LAUNCHER_PID";
+
 /// The first pause before a crashed module is started again.
 pub const FIRST_PAUSE: Duration = Duration::from_millis(500);
 /// The longest pause.
@@ -154,7 +159,9 @@ impl ModuleCommand {
                 c
             }
         };
-        cmd.env("TCA_CONNECT", &self.endpoint).kill_on_drop(true);
+        cmd.env("TCA_CONNECT", &self.endpoint)
+            .env(LAUNCHER_PID_ENV, std::process::id().to_string())
+            .kill_on_drop(true);
         let child = cmd.spawn().map_err(|source| LaunchError::Spawn {
             module: m.name.clone(),
             source,
