@@ -190,8 +190,8 @@ pub(crate) fn main() -> ExitCode {
     // The command runs as a task on the runtime's workers, not on this thread: a future
     // driven by `block_on` lives outside the worker pool, so every wake between it and the
     // tasks it talks to (central's driver, the modules' receive loops and handlers) would
-    // cross threads. On a worker, a message and its answer mostly stay on one thread (an
-    // in-process query round trip: about 6 µs instead of 11-50 µs, see BENCHMARKS.md).
+    // cross threads. On a worker, a message and its answer mostly stay on one thread (see
+    // BENCHMARKS.md, "Same-machine link", for the in-process round trip before and after).
     let command = runtime.spawn(async move {
         match cli.command {
             Command::Walk(args) => walk::run(args).await,
