@@ -1,7 +1,7 @@
 //! The hill course (Figure 9's) walked by the shipped hexapod over several seeds, with the
 //! acceptance limits checked as `tca navigate --robot hexapod --terrain hill --direct
 //! --seeds N` checks them:
-//! `cargo run --release -p tca-nav-hexapod --example campaign -- [FIRST_SEED] [SEEDS]`.
+//! `cargo run --release -p tca-nav-hexapod --example hexapod_campaign -- [FIRST_SEED] [SEEDS]`.
 
 use std::sync::Arc;
 
