@@ -39,6 +39,11 @@ use crate::crossing::{Answer, Crossing, Payload};
 use crate::log::side_module;
 use crate::side::{Direction, Side};
 
+/// How long a carried task's failure waits before it crosses back, so that exceptions raised
+/// in the task, delivered to the bridge just before the failure, cross ahead of it. A failed
+/// task's outcome arrives this much later than its delay says; an achieved one does not wait.
+pub(crate) const EXCEPTION_GRACE: std::time::Duration = std::time::Duration::from_millis(5);
+
 type Handled = Result<Vec<u8>, HandlerError>;
 
 fn stopping() -> HandlerError {
@@ -524,10 +529,11 @@ pub(crate) async fn carry(core: Weak<Core>, side: Side, ctx: Context, data: Vec<
     drop(c);
     let outcome = child.outcome().await;
     if !matches!(outcome, Ok(TaskOutcome::Achieved)) {
-        // Central tells a node's failure at once, even while an exception raised in it is
-        // still on its way to the bridge: let the handler of one already delivered run
-        // first (it finds the carry until its outcome has crossed, see `Core::answer`).
-        tokio::task::yield_now().await;
+        // Central sends an exception raised in the node before the node's failure, but the
+        // bridge handles the exception in a task of its own, which may not have run yet:
+        // the failure waits EXCEPTION_GRACE so that the exception crosses first (its handler
+        // finds the carry until the outcome has crossed, see `Core::answer`).
+        tokio::time::sleep(EXCEPTION_GRACE).await;
     }
     match outcome {
         Ok(TaskOutcome::Achieved) => Ok(Vec::new()),
