@@ -288,15 +288,7 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
         }
         reports.push(report);
     }
-    let accepted = |r: &RunReport| {
-        r.reached
-            && r.final_error_m <= 0.03 * r.distance_m
-            && r.collisions == 0
-            && r.falls == 0
-            && r.untraversable_frames == 0
-            && r.true_map_path_m.is_some_and(|m| r.distance_m <= 1.25 * m)
-    };
-    let ok = reports.iter().filter(|r| accepted(r)).count();
+    let ok = reports.iter().filter(|r| r.meets_acceptance()).count();
     if args.json {
         let value = if reports.len() == 1 {
             serde_json::to_value(&reports[0])?

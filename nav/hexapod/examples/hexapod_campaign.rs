@@ -34,12 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         let (r, _) = run(&course.terrain, &mut base, params.clone(), &opts)?;
         let best = r.true_map_path_m.unwrap_or(f64::NAN);
-        let accepted = r.reached
-            && r.final_error_m <= 0.03 * r.distance_m
-            && r.collisions == 0
-            && r.falls == 0
-            && r.untraversable_frames == 0
-            && r.distance_m <= 1.25 * best;
+        let accepted = r.meets_acceptance();
         ok += usize::from(accepted);
         println!(
             "hill (hexapod) seed {seed}: reached {} ({}), {:.2} m (true-map path {best:.2} m, ratio {:.3}), final error {:.3} m ({:.2} %), estimate error {:.3} m, {} replans, {} turns, {} frames, {:.1} Hz, collisions {}, falls {}, untraversable frames {}, stalls {}",

@@ -67,6 +67,22 @@ pub struct RunReport {
     pub true_map_path_m: Option<f64>,
 }
 
+impl RunReport {
+    /// Whether the run passes every acceptance limit: reached, final error within 3 % of the
+    /// distance, no collision, fall or frame in an untraversable cell, and a path at most
+    /// 1.25 times the true-map path.
+    pub fn meets_acceptance(&self) -> bool {
+        self.reached
+            && self.final_error_m <= 0.03 * self.distance_m
+            && self.collisions == 0
+            && self.falls == 0
+            && self.untraversable_frames == 0
+            && self
+                .true_map_path_m
+                .is_some_and(|m| self.distance_m <= 1.25 * m)
+    }
+}
+
 /// The danger map of the whole true terrain, for judging a run.
 pub fn true_danger_map(terrain: &HeightField, params: &NavParams) -> Result<DangerMap, NavError> {
     let g = terrain.grid();
