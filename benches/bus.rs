@@ -1,8 +1,9 @@
 //! Bus benchmarks: routed query round trips and goal throughput through central, in-process
-//! and over zenoh loopback, logging on; with the baselines measured in the same run (a raw
-//! tokio channel round trip, a raw zenoh get/queryable round trip through a router) and
-//! central's own cost per message (the sans-I/O core plus the log writer, no transport).
-//! Every timing loop runs as a task on a runtime worker, as the `tca` command runs its work.
+//! and over zenoh loopback, logging on (goals in-process also with central keeping its
+//! journal); with the baselines measured in the same run (a raw tokio channel round trip, a raw
+//! zenoh get/queryable round trip through a router) and central's own cost per message (the
+//! sans-I/O core plus the log writer, no transport). Every timing loop runs as a task on a
+//! runtime worker, as the `tca` command runs its work.
 //!
 //! Run: `cargo bench --bench bus` (figures in BENCHMARKS.md).
 
@@ -182,7 +183,8 @@ fn routed_query(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
     rt.block_on(async { bus.central.shutdown().await.unwrap() });
 }
 
-fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
+/// Goals through central, in-process or over zenoh, central keeping a journal or not.
+fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool, journal: bool) {
     // A sink module counting goals, and a sender.
     // The sink wakes the timing loop once, when the count reaches the sample's target (a wake
     // per goal would time tokio's Notify as much as central).
@@ -199,6 +201,7 @@ fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
             } else {
                 vec![]
             },
+            journal: journal.then(|| dir.path().join("central.journal")),
             ..StartOptions::default()
         })
         .await
@@ -223,10 +226,11 @@ fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
         let sender = Module::builder("sender").connect(&connector).await.unwrap();
         (central, sender, sink, dir)
     });
-    let name = if zenoh {
-        "central/zenoh_goal_throughput"
-    } else {
-        "central/inproc_goal_throughput"
+    let name = match (zenoh, journal) {
+        (true, false) => "central/zenoh_goal_throughput",
+        (true, true) => "central/zenoh_goal_throughput_journaled",
+        (false, false) => "central/inproc_goal_throughput",
+        (false, true) => "central/inproc_goal_throughput_journaled",
     };
     goal_flood::measure(c, rt, name, &sender, &count, &target, &notify);
     rt.block_on(async { central.shutdown().await.unwrap() });
@@ -326,10 +330,11 @@ fn benches(c: &mut Criterion) {
     core_cost(c);
     raw_tokio(c, &rt);
     routed_query(c, &rt, false);
-    goal_throughput(c, &rt, false);
+    goal_throughput(c, &rt, false, false);
+    goal_throughput(c, &rt, false, true);
     raw_zenoh(c, &rt);
     routed_query(c, &rt, true);
-    goal_throughput(c, &rt, true);
+    goal_throughput(c, &rt, true, false);
 }
 
 criterion_group! {

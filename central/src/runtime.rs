@@ -11,7 +11,7 @@
 //! then the actions go out (and what they call for in turn, likewise).
 
 use std::collections::{HashMap, VecDeque};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Duration;
@@ -227,6 +227,7 @@ pub struct RunningCentral {
     zenoh: Option<ZenohCentral>,
     local: Vec<LocalListener>,
     restored: Option<Restored>,
+    kept_log: Option<PathBuf>,
 }
 
 /// What a central started on a journal of a crashed central restored.
@@ -256,6 +257,11 @@ impl RunningCentral {
     /// journal ([`StartOptions::journal`]).
     pub fn restored(&self) -> Option<&Restored> {
         self.restored.as_ref()
+    }
+
+    /// Where the log found at the log path was kept ([`StartOptions::keep_previous_log`]).
+    pub fn kept_log(&self) -> Option<&Path> {
+        self.kept_log.as_deref()
     }
 
     /// The endpoints central listens on: local ones first, then zenoh ones.
@@ -328,11 +334,15 @@ pub struct StartOptions {
     /// the state of a central that crashed, central starts from that state: the modules rejoin
     /// and what they were doing goes on. A clean [`RunningCentral::shutdown`] removes it.
     pub journal: Option<PathBuf>,
-    /// The traffic log of the central that crashed, when it was set aside
-    /// ([`tca_logs::set_aside`]) for the new one: the records of its last moments that it lacks
-    /// (the log is flushed every 50 ms, the journal before anything goes out) are written at the
-    /// start of the new log, so that the logs read in order tell the whole history.
-    pub previous_log: Option<PathBuf>,
+    /// Keep a non-empty log found at `log` under the next free `STEM.N.mcap` next to it
+    /// ([`tca_logs::set_aside`]) instead of overwriting it; [`RunningCentral::kept_log`] says
+    /// where it went. On a crashed central's journal, that log is first checked against the
+    /// journal: the records of the crashed central's last moments that it lacks (the log is
+    /// flushed every 50 ms, the journal before anything goes out) are written at the start of
+    /// the new log, so that the logs read in order tell the whole history. The log is moved
+    /// only once the new journal head says where it goes, so a central killed while it starts
+    /// leaves the next one able to tell whose log is whose.
+    pub keep_previous_log: bool,
 }
 
 impl StartOptions {
@@ -386,8 +396,7 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
         Some(path) => Some(crate::journal::open(
             path,
             options.config.clone(),
-            options.previous_log.as_deref(),
-            options.log.is_some(),
+            options.log.as_deref(),
             now_ns(),
         )?),
         None => None,
@@ -414,13 +423,20 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
     // to start with (what the crashed central's log lacks, its links closing): a crash from
     // here on finds them in the journal, whatever reached the log.
     let mut pending_prefix = Vec::new();
+    let kept_log = match (&options.log, options.keep_previous_log) {
+        (Some(log), true) => tca_logs::aside_name(log)?,
+        _ => None,
+    };
     let (core, journal, restored) = match recovered {
         Some(mut r) => {
             let mut core = r.core;
             pending_prefix = std::mem::take(&mut r.log_prefix);
-            let journal =
-                r.pending
-                    .start(&mut core, options.log.is_some(), pending_prefix.clone())?;
+            let journal = r.pending.start(
+                &mut core,
+                options.log.is_some(),
+                pending_prefix.clone(),
+                kept_log.clone(),
+            )?;
             for w in &r.warnings {
                 tracing::warn!(journal = %journal.path().display(), "{w}");
             }
@@ -436,6 +452,14 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
         }
         None => (Central::new(options.config.clone()), None, None),
     };
+    if let (Some(log), Some(kept)) = (&options.log, &kept_log) {
+        std::fs::rename(log, kept).map_err(|source| {
+            CentralError::Log(tca_logs::LogError::Io {
+                path: log.clone(),
+                source,
+            })
+        })?;
+    }
     let mut log = match &options.log {
         Some(path) => Some(LogSink::create(path)?),
         None => None,
@@ -486,6 +510,7 @@ pub async fn start(options: StartOptions) -> Result<RunningCentral> {
         zenoh,
         local,
         restored,
+        kept_log,
     })
 }
 

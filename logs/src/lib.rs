@@ -50,4 +50,4 @@ pub use show::{ShowFilter, render, tree_at};
 pub use sink::LogSink;
 pub use stats::{LogStats, ModuleStats, QueryStats, Span, TimeBase, stats};
 pub use timecheck::{TimeCheck, time_check};
-pub use writer::{FLUSH_INTERVAL, LogWriter, set_aside};
+pub use writer::{FLUSH_INTERVAL, LogWriter, aside_name, set_aside};

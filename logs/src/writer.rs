@@ -212,9 +212,21 @@ impl LogWriter {
 /// (N = 1, 2, ...) and returns where it went; `None` when there was nothing to keep.
 ///
 /// A central restarted after a crash with the same `--log` must not overwrite the log that
-/// tells what happened before the crash: `tca central` and `tca up` call this before they
-/// create their log.
+/// tells what happened before the crash: central does this before it creates its log.
 pub fn set_aside(path: &Path) -> Result<Option<PathBuf>> {
+    let Some(kept) = aside_name(path)? else {
+        return Ok(None);
+    };
+    std::fs::rename(path, &kept).map_err(|source| LogError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    Ok(Some(kept))
+}
+
+/// Where [`set_aside`] would move the log at `path` now: the first free `STEM.N.mcap` next to
+/// it, or `None` when there is no non-empty log to keep. Nothing is moved.
+pub fn aside_name(path: &Path) -> Result<Option<PathBuf>> {
     let io = |source| LogError::Io {
         path: path.to_owned(),
         source,
@@ -236,7 +248,6 @@ pub fn set_aside(path: &Path) -> Result<Option<PathBuf>> {
     for n in 1..100_000u32 {
         let candidate = path.with_file_name(format!("{stem}.{n}.{ext}"));
         if !candidate.exists() {
-            std::fs::rename(path, &candidate).map_err(io)?;
             return Ok(Some(candidate));
         }
     }

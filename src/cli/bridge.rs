@@ -282,10 +282,10 @@ async fn demo(args: DemoArgs) -> anyhow::Result<ExitCode> {
         down_delay: delay(Direction::Down, down)?,
         telemetry_hz: args.telemetry_hz,
         speed: args.speed,
-        session: tca_legged_ground::SessionOptions {
+        operator: tca_legged_ground::Operator::LegMoves(tca_legged_ground::SessionOptions {
             steps: args.steps,
             ..Default::default()
-        },
+        }),
         out: args.out.clone(),
         playback_speed: (!args.no_playback).then_some(args.playback_speed),
     };
@@ -294,7 +294,16 @@ async fn demo(args: DemoArgs) -> anyhow::Result<ExitCode> {
          telemetry at {} Hz",
         args.robot, args.course, args.steps, up, down, args.telemetry_hz
     );
-    let report = tca_legged_ground::demo(&options, |s| {
+    run_session(&options, args.json).await
+}
+
+/// Runs an operator's session across the bridge on this machine and prints what it did;
+/// exit code 2 unless every step was achieved and the playback gave the same telemetry.
+pub(crate) async fn run_session(
+    options: &tca_legged_ground::DemoOptions,
+    json: bool,
+) -> anyhow::Result<ExitCode> {
+    let report = tca_legged_ground::demo(options, |s, footfall| {
         println!(
             "  step {:>2}: {} {} ({:.3} s from sending to its outcome)",
             s.step,
@@ -302,20 +311,36 @@ async fn demo(args: DemoArgs) -> anyhow::Result<ExitCode> {
             s.outcome,
             s.round_trip_s()
         );
+        if let Some(f) = footfall {
+            println!(
+                "           target ({:.2}, {:.2}) of {} green cells; maps {:.2} s, plan {:.2} s \
+                 ({}, {} swing way-points); landed {}",
+                f.target[0],
+                f.target[1],
+                f.green_cells,
+                f.maps_s,
+                f.plan_s,
+                f.planner,
+                f.swing_waypoints,
+                f.landed_error_m.map_or_else(
+                    || "with no touch-down seen".to_owned(),
+                    |e| format!("{:.3} m from the target", e)
+                )
+            );
+        }
     })
     .await?;
+    let steps = options.operator.steps();
     println!(
         "{} of {} steps achieved; {} telemetry samples came down",
-        report.session.achieved,
-        report.session.steps.len(),
-        report.telemetry
+        report.session.achieved, steps, report.telemetry
     );
     print_delays("delays measured by the bridge", &report.bridge_delays);
     print_delays(
         "delays between the centrals (from their logs)",
         &report.central_delays,
     );
-    let mut ok = report.session.achieved == args.steps;
+    let mut ok = report.session.achieved == steps;
     if let Some(r) = &report.replay {
         println!(
             "playback of the bridge's log: {} of {} telemetry samples again, {}; arrival times \
@@ -334,7 +359,7 @@ async fn demo(args: DemoArgs) -> anyhow::Result<ExitCode> {
     for f in &report.files {
         println!("wrote {}", f.display());
     }
-    if args.json {
+    if json {
         println!("{}", serde_json::to_string(&report)?);
     }
     Ok(if ok {

@@ -89,17 +89,6 @@ pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
         )),
         None => None,
     };
-    let kept = match &args.log {
-        Some(log) => tca_logs::set_aside(log).context("cannot keep the previous log")?,
-        None => None,
-    };
-    if let (Some(log), Some(kept)) = (&args.log, &kept) {
-        eprintln!(
-            "the previous log {} is kept as {}",
-            log.display(),
-            kept.display()
-        );
-    }
     let options = StartOptions {
         config: CentralConfig {
             max_waiting: args.max_waiting,
@@ -121,11 +110,18 @@ pub(crate) async fn run(args: CentralArgs) -> anyhow::Result<ExitCode> {
         listen: args.listen.clone(),
         insecure: args.insecure,
         journal: args.journal.clone(),
-        previous_log: kept,
+        keep_previous_log: true,
     };
     let central = tca_central::start(options)
         .await
         .context("cannot start central")?;
+    if let (Some(log), Some(kept)) = (&args.log, central.kept_log()) {
+        eprintln!(
+            "the previous log {} is kept as {}",
+            log.display(),
+            kept.display()
+        );
+    }
     if let Some(restored) = central.restored() {
         eprintln!("{}", restored.summary);
         if restored.log_records_recovered > 0 {

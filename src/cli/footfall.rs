@@ -71,6 +71,57 @@ for the leg where it no longer stands is refused: plan again), 3 when it was kil
   tca footfall campaign --pairs 20 --seed 2 --json
   tca footfall campaign --out out/footfall/campaign.json")]
     Campaign(CampaignArgs),
+    /// An operator's session of FootFall steps across the telemetry bridge, all on this
+    /// machine: a robot-side central (the rover's Controller on the rock field, sagging, and
+    /// FootFall's executor), a ground-side central (FootFall's planner and the telemetry
+    /// monitor), the bridge between them with a delay each way; each step's target picked
+    /// from the leg's maps, planned, sent and waited for; the delays measured and the
+    /// bridge's log played back against the telemetry that came live.
+    #[command(after_help = "Examples:
+  tca footfall session                              # ten steps, 1.3 s each way
+  tca footfall session --steps 3 --delay 0.3 --json
+  tca footfall session --planner sbl --out out/footfall-session
+
+Exit status 0 when every step was achieved and the playback gave the same telemetry, 2
+otherwise. The logs (robot.mcap, ground.mcap, bridge.mcap, telemetry.jsonl) go to --out.")]
+    Session(SessionArgs),
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct SessionArgs {
+    /// Steps to plan and carry out.
+    #[arg(long, default_value_t = 10)]
+    steps: usize,
+    /// The delay each way, seconds (1.3: the light time to the Moon).
+    #[arg(long, default_value_t = 1.3)]
+    delay: f64,
+    /// How far from where it stands each step aims a foot, metres.
+    #[arg(long, default_value_t = 0.3)]
+    stride: f64,
+    /// Which planner plans the swings.
+    #[arg(long, value_enum, default_value_t = PlannerArg::Astar)]
+    planner: PlannerArg,
+    /// Plan without the field heuristics.
+    #[arg(long)]
+    no_heuristics: bool,
+    /// Telemetry samples a second.
+    #[arg(long, default_value_t = 10.0)]
+    telemetry_hz: f64,
+    /// The Controller's speed on the wall clock (1: as fast as the robot).
+    #[arg(long, default_value_t = 1.0)]
+    speed: f64,
+    /// Play the bridge's log back this many times faster than recorded.
+    #[arg(long, default_value_t = 4.0)]
+    playback_speed: f64,
+    /// Do not play the bridge's log back.
+    #[arg(long)]
+    no_playback: bool,
+    /// Where the logs go.
+    #[arg(long, default_value = "out/footfall-session")]
+    out: PathBuf,
+    /// Print the report as one line of JSON at the end.
+    #[arg(long)]
+    json: bool,
 }
 
 /// The robot and its terrain.
@@ -250,6 +301,7 @@ pub(crate) async fn run(cmd: FootfallCommand) -> anyhow::Result<ExitCode> {
         FootfallCommand::Maps(a) => maps(a).await,
         FootfallCommand::Plan(a) => plan(a).await,
         FootfallCommand::Send(a) => send(a).await,
+        FootfallCommand::Session(a) => session(a).await,
         FootfallCommand::Campaign(a) => campaign(a).await,
     }
 }
@@ -625,6 +677,36 @@ async fn send(a: SendArgs) -> anyhow::Result<ExitCode> {
         println!("step {text} after {:.2} s", started.elapsed().as_secs_f64());
     }
     Ok(ExitCode::from(code))
+}
+
+async fn session(a: SessionArgs) -> anyhow::Result<ExitCode> {
+    use tca_bridge::Direction;
+    let delay = |d, s| -> anyhow::Result<Duration> { Ok(tca_bridge::file::delay(d, s)?) };
+    let options = tca_legged_ground::DemoOptions {
+        robot: "athlete".into(),
+        course: "rock-field".into(),
+        up_delay: delay(Direction::Up, a.delay)?,
+        down_delay: delay(Direction::Down, a.delay)?,
+        telemetry_hz: a.telemetry_hz,
+        speed: a.speed,
+        operator: tca_legged_ground::Operator::Footfall(
+            tca_legged_ground::FootfallSessionOptions {
+                steps: a.steps,
+                stride_m: a.stride,
+                planner: a.planner.into(),
+                heuristics: !a.no_heuristics,
+                ..Default::default()
+            },
+        ),
+        out: a.out.clone(),
+        playback_speed: (!a.no_playback).then_some(a.playback_speed),
+    };
+    println!(
+        "FootFall session across the bridge: athlete on the rock field, {} steps, {:.3} s each \
+         way, telemetry at {} Hz",
+        a.steps, a.delay, a.telemetry_hz
+    );
+    super::bridge::run_session(&options, a.json).await
 }
 
 async fn campaign(a: CampaignArgs) -> anyhow::Result<ExitCode> {

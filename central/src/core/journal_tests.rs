@@ -260,6 +260,7 @@ fn entries(bytes: &[u8]) -> Vec<JournalEntry> {
         config: CentralConfig::default(),
         log_records: None,
         log_prefix: Vec::new(),
+        log_kept_as: None,
         state: Vec::new(),
     };
     format::append_record(&mut file, &head).unwrap();

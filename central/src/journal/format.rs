@@ -39,6 +39,11 @@ pub struct Head {
     /// its new log (the crashed central's last moments, its links closing), so that a crash
     /// before they are all written loses none of them; empty in later heads.
     pub log_prefix: Vec<tca_logs::LogRecord>,
+    /// Where the central that wrote this head was to move its predecessor's traffic log
+    /// before creating its own (`None` when there was none to move, and in rewritten heads).
+    /// While nothing is there the move was not made: the log at the log path is still the
+    /// predecessor's, and this head's log was never written.
+    pub log_kept_as: Option<std::path::PathBuf>,
     /// The saved state ([`Central::save`](crate::Central::save)).
     pub state: Vec<u8>,
 }
@@ -170,6 +175,7 @@ mod tests {
             config: CentralConfig::default(),
             log_records: Some(3),
             log_prefix: Vec::new(),
+            log_kept_as: None,
             state: vec![1, 2, 3],
         };
         append_record(&mut bytes, &head).unwrap();

@@ -39,19 +39,22 @@ impl Pending {
     /// Writes the core's state as the journal's head, turns journaling on, and returns the
     /// journal. With a traffic log (`logging`), the head says that `log_prefix` follows at the
     /// start of the new log: written after the head, so that a crash before they are all in
-    /// the log loses none of them.
+    /// the log loses none of them. `log_kept_as` is where the log now at the log path is to be
+    /// moved once this returns (see [`Head::log_kept_as`]).
     pub(crate) fn start(
         self,
         core: &mut Central,
         logging: bool,
         log_prefix: Vec<LogRecord>,
+        log_kept_as: Option<PathBuf>,
     ) -> Result<Journal> {
-        let head = head(core, self.id, logging.then_some(0), log_prefix).map_err(|reason| {
+        let mut head = head(core, self.id, logging.then_some(0), log_prefix).map_err(|reason| {
             JournalError::Restore {
                 path: self.path.clone(),
                 reason,
             }
         })?;
+        head.log_kept_as = log_kept_as;
         let journal = Journal::create(&self.path, &head, self.lock)?;
         core.record_journal(self.id);
         Ok(journal)
@@ -72,6 +75,7 @@ pub(crate) fn head(
         config: core.config().clone(),
         log_records,
         log_prefix,
+        log_kept_as: None,
         state: core
             .save()
             .map_err(|e| format!("central's state does not save: {e}"))?,
@@ -80,15 +84,15 @@ pub(crate) fn head(
 
 /// Opens the journal at `path` for a central with `config` starting at `now_ns`: a fresh core
 /// if it holds nothing, else the crashed central's state restored, its events replayed and
-/// its links closed. `previous_log` is the crashed central's traffic log (set aside), checked
-/// against what the replay logged; `logging` says whether the new central keeps a log.
+/// its links closed. `log` is the new central's traffic log path, where the crashed central's
+/// log still is (not yet moved aside): it is checked against what the replay logged.
 pub(crate) fn open(
     path: &Path,
     config: CentralConfig,
-    previous_log: Option<&Path>,
-    logging: bool,
+    log: Option<&Path>,
     now_ns: u64,
 ) -> Result<Recovered> {
+    let logging = log.is_some();
     let lock = lock(path)?;
     let bytes = match std::fs::read(path) {
         Ok(b) => b,
@@ -173,6 +177,7 @@ pub(crate) fn open(
     let mut log_prefix = if logging {
         let mut expected = contents.head.log_prefix;
         expected.extend(replayed);
+        let previous_log = log.filter(|l| written_by_head(l, contents.head.log_kept_as.as_deref()));
         missing_records(
             contents.head.log_records,
             previous_log,
@@ -211,6 +216,17 @@ pub(crate) fn open(
             lock,
         },
     })
+}
+
+/// Whether the file at the log path `log` is the log of the central whose head says it was to
+/// move its predecessor's log to `kept_as`: not when that move was never made (the file is the
+/// predecessor's; the crashed central died before it had a log), nor when there is no file or
+/// an empty one.
+fn written_by_head(log: &Path, kept_as: Option<&Path>) -> bool {
+    if kept_as.is_some_and(|k| !k.exists()) {
+        return false;
+    }
+    std::fs::metadata(log).is_ok_and(|m| m.len() > 0)
 }
 
 /// The records the crashed central logged or was to log after the `head_records` its log
@@ -270,8 +286,13 @@ fn missing_records(
 
 #[cfg(test)]
 mod tests {
-    use super::missing_records;
-    use tca_logs::{LinkEvent, LinkRecord, LogRecord, RecordKind};
+    use std::path::{Path, PathBuf};
+
+    use super::{missing_records, open};
+    use crate::config::CentralConfig;
+    use crate::core::Central;
+    use crate::journal::format::{self, Head};
+    use tca_logs::{LinkEvent, LinkRecord, LogRecord, LogWriter, RecordKind};
 
     fn record(i: u64) -> LogRecord {
         LogRecord {
@@ -308,5 +329,82 @@ mod tests {
         let mut warnings = Vec::new();
         assert!(missing_records(None, None, vec![record(1)], &mut warnings).is_empty());
         assert!(warnings.is_empty());
+    }
+
+    /// A journal at `path` holding `head` alone: a central that wrote its first head and was
+    /// killed before anything else.
+    fn write_journal(path: &Path, log_prefix: Vec<LogRecord>, log_kept_as: Option<PathBuf>) {
+        let config = CentralConfig::default();
+        let head = Head {
+            version: env!("CARGO_PKG_VERSION").to_owned(),
+            id: 9,
+            state: Central::new(config.clone()).save().unwrap(),
+            config,
+            log_records: Some(0),
+            log_prefix,
+            log_kept_as,
+        };
+        let mut bytes = format::MAGIC.to_vec();
+        format::append_record(&mut bytes, &head).unwrap();
+        std::fs::write(path, bytes).unwrap();
+    }
+
+    fn write_log(path: &Path, records: &[LogRecord]) {
+        let mut log = LogWriter::create(path).unwrap();
+        for r in records {
+            log.append(r).unwrap();
+        }
+        log.finish().unwrap();
+    }
+
+    #[test]
+    fn a_central_killed_before_it_moved_its_predecessors_log_had_no_log() {
+        // The predecessor logged 0..5 (all in its log, still at the log path); the central
+        // restarted after it wrote a head announcing 100..102 and was killed before it moved
+        // that log to traffic.1.mcap and created its own.
+        let dir = tempfile::tempdir().unwrap();
+        let (journal, log) = (dir.path().join("j"), dir.path().join("traffic.mcap"));
+        write_log(&log, &(0..5).map(record).collect::<Vec<_>>());
+        let announced: Vec<LogRecord> = (100..102).map(record).collect();
+        write_journal(
+            &journal,
+            announced.clone(),
+            Some(dir.path().join("traffic.1.mcap")),
+        );
+        let r = open(&journal, CentralConfig::default(), Some(&log), 0).unwrap();
+        assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+        assert_eq!(
+            r.recovered, 2,
+            "what the killed central announced, and no more"
+        );
+        assert_eq!(r.log_prefix[..2], announced[..]);
+    }
+
+    #[test]
+    fn a_central_that_moved_its_predecessors_log_is_checked_against_its_own() {
+        let dir = tempfile::tempdir().unwrap();
+        let (journal, log) = (dir.path().join("j"), dir.path().join("traffic.mcap"));
+        let kept = dir.path().join("traffic.1.mcap");
+        write_log(&kept, &(0..5).map(record).collect::<Vec<_>>());
+        let announced: Vec<LogRecord> = (100..103).map(record).collect();
+        write_log(&log, &announced[..1]);
+        write_journal(&journal, announced.clone(), Some(kept));
+        let r = open(&journal, CentralConfig::default(), Some(&log), 0).unwrap();
+        assert!(r.warnings.is_empty(), "{:?}", r.warnings);
+        assert_eq!(r.recovered, 2, "the two its log lacks");
+        assert_eq!(r.log_prefix[..2], announced[1..]);
+    }
+
+    #[test]
+    fn another_centrals_log_at_the_log_path_is_not_taken_for_its_own() {
+        // Without the head saying where the predecessor's log was to go, a log that does not
+        // match is refused with a warning rather than written twice.
+        let dir = tempfile::tempdir().unwrap();
+        let (journal, log) = (dir.path().join("j"), dir.path().join("traffic.mcap"));
+        write_log(&log, &(0..5).map(record).collect::<Vec<_>>());
+        write_journal(&journal, (100..102).map(record).collect(), None);
+        let r = open(&journal, CentralConfig::default(), Some(&log), 0).unwrap();
+        assert_eq!(r.recovered, 0);
+        assert!(r.warnings[0].contains("does not match"), "{:?}", r.warnings);
     }
 }

@@ -4,6 +4,11 @@
 //! each way; then the bridge's log played back to a fresh ground side and the telemetry
 //! compared with what came live. Every central logs its traffic, so the delays are measured
 //! twice: by the bridge, and from the two centrals' logs.
+//!
+//! The operator either sends leg moves it plans itself ([`Operator::LegMoves`]) or works
+//! with FootFall ([`Operator::Footfall`]): then the robot side also runs FootFall's executor,
+//! the robot sags under load as in the field, the ground side runs FootFall's planner on its
+//! copy of the terrain, and each step is picked from the leg's maps, planned and sent up.
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -19,8 +24,29 @@ use tca_module::{Connector, Module};
 use tokio::sync::mpsc;
 
 use crate::error::GroundError;
+use crate::footfall::{FootfallSessionOptions, FootfallStep, run_footfall_session};
 use crate::monitor::{MonitorOptions, Received, connect_monitor};
 use crate::session::{SessionOptions, SessionReport, StepRecord, run_session};
+
+/// What the operator does across the bridge.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Operator {
+    /// Leg moves planned on the ground from the legs' states, sent as `legged.legMove`.
+    LegMoves(SessionOptions),
+    /// FootFall steps: maps, a target from their green cells, a plan by FootFall's planner on
+    /// the ground side, carried out by its executor on the robot side.
+    Footfall(FootfallSessionOptions),
+}
+
+impl Operator {
+    /// Steps to take.
+    pub fn steps(&self) -> usize {
+        match self {
+            Operator::LegMoves(o) => o.steps,
+            Operator::Footfall(o) => o.steps,
+        }
+    }
+}
 
 /// What crosses up in the session: the Controller's queries and commands.
 pub const UP: &[&str] = &[
@@ -33,6 +59,9 @@ pub const UP: &[&str] = &[
     "legged.halt",
     "legged.resume",
 ];
+
+/// What else crosses up when the operator works with FootFall: the plans.
+pub const FOOTFALL_UP: &[&str] = &["footfall.execute"];
 
 /// What crosses down: telemetry, support states and foot contacts.
 pub const DOWN: &[&str] = &[
@@ -56,8 +85,8 @@ pub struct DemoOptions {
     pub telemetry_hz: f64,
     /// The Controller's speed on the wall clock (1: as fast as the robot).
     pub speed: f64,
-    /// The operator's steps.
-    pub session: SessionOptions,
+    /// What the operator does.
+    pub operator: Operator,
     /// Where the logs go: `robot.mcap`, `ground.mcap`, `bridge.mcap`, `telemetry.jsonl`.
     pub out: PathBuf,
     /// Play the bridge's log back this many times faster than recorded (`None`: no
@@ -74,7 +103,7 @@ impl Default for DemoOptions {
             down_delay: Duration::from_millis(1300),
             telemetry_hz: 10.0,
             speed: 4.0,
-            session: SessionOptions::default(),
+            operator: Operator::LegMoves(SessionOptions::default()),
             out: PathBuf::from("out/bridge-demo"),
             playback_speed: Some(1.0),
         }
@@ -104,6 +133,9 @@ pub struct ReplayCheck {
 pub struct DemoReport {
     /// The operator's session.
     pub session: SessionReport,
+    /// With FootFall, what each step picked, planned and landed (in the steps' order).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub footfall: Vec<FootfallStep>,
     /// The delays as the bridge measured them, up then down.
     pub bridge_delays: Vec<DelayStats>,
     /// The delays between the two centrals, from their logs, up then down.
@@ -139,10 +171,11 @@ fn drain(rx: &mut mpsc::UnboundedReceiver<Received>) -> Vec<Received> {
     out
 }
 
-/// Runs the session; `progress` hears of each step as it ends.
+/// Runs the session; `progress` hears of each step as it ends (with FootFall's details when
+/// the operator works with it).
 pub async fn demo(
     options: &DemoOptions,
-    progress: impl Fn(&StepRecord),
+    progress: impl Fn(&StepRecord, Option<&FootfallStep>),
 ) -> Result<DemoReport, GroundError> {
     std::fs::create_dir_all(&options.out)
         .map_err(|e| GroundError::Setup(format!("cannot create {}: {e}", options.out.display())))?;
@@ -163,16 +196,38 @@ pub async fn demo(
     let robot = Connector::endpoint(robot_ep.clone());
     let ground = Connector::endpoint(ground_ep.clone());
 
+    let footfall = matches!(options.operator, Operator::Footfall(_));
     let mut walk = LeggedWalkOptions::new(options.robot.clone());
     walk.terrain = Some(LeggedTerrain::Course {
         name: options.course.clone(),
         seed: 1,
     });
+    if footfall {
+        walk.sag = Some(tca_legged_sim::SagParams::athlete());
+    }
     let prepared = prepare(&walk).map_err(|e| GroundError::Setup(format!("{e:#}")))?;
     let mut controller = prepared.setup.controller_config();
     controller.telemetry_hz = Some(options.telemetry_hz);
     controller.speed = Some(options.speed);
     let controller = tca_legged_controller::connect(&robot, controller).await?;
+    // FootFall's two halves: the executor beside the robot, the planner on the ground with
+    // its own copy of the terrain.
+    let footfall_modules = if footfall {
+        let executor =
+            tca_footfall_bus::connect_executor(&robot, tca_footfall_bus::EXECUTOR_MODULE).await?;
+        let planner = tca_footfall_bus::connect_planner(
+            &ground,
+            tca_footfall_bus::PlannerConfig {
+                terrain: prepared.setup.terrain.clone(),
+                options: tca_footfall::plan::PlanOptions::default(),
+                module_name: tca_footfall_bus::PLANNER_MODULE.into(),
+            },
+        )
+        .await?;
+        vec![executor, planner]
+    } else {
+        Vec::new()
+    };
     let (monitor, mut live) = connect_monitor(
         &ground,
         MonitorOptions {
@@ -185,23 +240,42 @@ pub async fn demo(
     let mut config = BridgeConfig::new(robot.clone(), ground.clone());
     config.up.delay = options.up_delay;
     config.down.delay = options.down_delay;
-    for (way, names) in [(&mut config.up, UP), (&mut config.down, DOWN)] {
+    let extra_up: &[&str] = if footfall { FOOTFALL_UP } else { &[] };
+    let up_names: Vec<&str> = UP.iter().chain(extra_up).copied().collect();
+    for (way, names) in [(&mut config.up, &up_names[..]), (&mut config.down, DOWN)] {
         for n in names {
             way.messages
                 .push(NamePattern::parse(n).map_err(GroundError::Setup)?);
         }
     }
     config.log = Some(files[2].clone());
-    let within = options.up_delay + options.down_delay + options.session.query_timeout;
+    let round_trip = options.up_delay + options.down_delay;
     let bridge = tca_bridge::start(config).await?;
 
     let operator = Module::builder("operator").connect(&ground).await?;
-    let session_options = SessionOptions {
-        query_timeout: within,
-        ..options.session.clone()
+    let session = match &options.operator {
+        Operator::LegMoves(o) => {
+            let o = SessionOptions {
+                query_timeout: round_trip + o.query_timeout,
+                ..o.clone()
+            };
+            run_session(&operator, &o, |s| progress(s, None))
+                .await
+                .map(|r| (r, Vec::new()))
+        }
+        Operator::Footfall(o) => {
+            // The planner's own questions cross the bridge twice before it answers.
+            let o = FootfallSessionOptions {
+                query_timeout: round_trip * 2 + o.query_timeout,
+                ..o.clone()
+            };
+            run_footfall_session(&operator, &o, |s, d| progress(s, Some(d))).await
+        }
     };
-    let session = run_session(&operator, &session_options, progress).await;
     // No more telemetry; what is on its way comes down before the bridge stops.
+    for m in footfall_modules {
+        m.close().await;
+    }
     controller.close().await;
     tokio::time::sleep(options.down_delay + Duration::from_millis(200)).await;
     operator.close().await;
@@ -213,7 +287,7 @@ pub async fn demo(
             .await
             .map_err(|e| GroundError::Setup(format!("a central did not stop cleanly: {e}")))?;
     }
-    let session = session?;
+    let (session, footfall) = session?;
 
     let recorded = Recorded::open(&files[2])?;
     let bridge_delays = recorded.delay_stats();
@@ -228,6 +302,7 @@ pub async fn demo(
     };
     Ok(DemoReport {
         session,
+        footfall,
         bridge_delays,
         central_delays,
         telemetry: live.len(),

@@ -19,6 +19,14 @@
 //! modules' tokens, declare central's token or another module's, or query anything. Sessions
 //! that share an identity share its keys: give each module its own identity to keep modules
 //! apart from each other. Central's own session, inside the router, is not subject to it.
+//!
+//! With both authenticators, a session is a zenoh user and, on a `tls/` (or `quic/`) link, a
+//! certificate's common name too. zenoh lets a message through when any subject the session
+//! matches allows it, so a session holding one identity's password and another's certificate
+//! must not match both identities' subjects: on those links the subject is the user *and* the
+//! certificate of one identity together, and a user alone is a subject only on links without
+//! certificates. A session whose user and certificate name different identities matches no
+//! subject and is denied everything.
 
 use serde_json::{Value, json};
 
@@ -42,6 +50,18 @@ impl Authenticators {
         self.users || self.certificates
     }
 }
+
+/// zenoh's link protocols that carry no client certificate: with both authenticators, a
+/// zenoh user alone is an identity only on these.
+const LINKS_WITHOUT_CERTIFICATES: &[&str] = &[
+    "tcp",
+    "udp",
+    "serial",
+    "unixpipe",
+    "unixsock-stream",
+    "vsock",
+    "ws",
+];
 
 fn rule(id: String, flow: &str, message: &str, key: String) -> Value {
     json!({
@@ -104,15 +124,25 @@ pub fn access_control(identities: &[String], by: Authenticators) -> Result<Value
         let rule_ids: Vec<Value> = ids.iter().map(|r| r["id"].clone()).collect();
         rules.extend(ids);
         let mut subject_ids = Vec::new();
-        if by.users {
-            let id = format!("{n}/user");
-            subjects.push(json!({ "id": id, "usernames": [n] }));
+        let mut subject = |suffix: &str, mut value: Value| {
+            let id = format!("{n}/{suffix}");
+            value["id"] = json!(id);
+            subjects.push(value);
             subject_ids.push(id);
-        }
-        if by.certificates {
-            let id = format!("{n}/certificate");
-            subjects.push(json!({ "id": id, "cert_common_names": [n] }));
-            subject_ids.push(id);
+        };
+        if by.users && by.certificates {
+            subject(
+                "user",
+                json!({ "usernames": [n], "link_protocols": LINKS_WITHOUT_CERTIFICATES }),
+            );
+            subject(
+                "user-and-certificate",
+                json!({ "usernames": [n], "cert_common_names": [n] }),
+            );
+        } else if by.users {
+            subject("user", json!({ "usernames": [n] }));
+        } else {
+            subject("certificate", json!({ "cert_common_names": [n] }));
         }
         policies.push(json!({ "id": n, "rules": rule_ids, "subjects": subject_ids }));
     }
@@ -183,13 +213,56 @@ mod tests {
         assert_eq!(acl["rules"].as_array().unwrap().len(), 14);
         assert_eq!(acl["subjects"].as_array().unwrap().len(), 4);
         let gait = &acl["policies"][0];
-        assert_eq!(gait["subjects"], json!(["gait/user", "gait/certificate"]));
+        assert_eq!(
+            gait["subjects"],
+            json!(["gait/user", "gait/user-and-certificate"])
+        );
+        // A login alone counts only where there is no certificate; with one, the login and
+        // the certificate must name the same identity.
+        let user = &acl["subjects"][0];
+        assert!(
+            !user["link_protocols"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|p| p == "tls" || p == "quic"),
+            "{user}"
+        );
+        let both = &acl["subjects"][1];
+        assert_eq!(both["usernames"], json!(["gait"]));
+        assert_eq!(both["cert_common_names"], json!(["gait"]));
         let text = acl.to_string();
         assert!(text.contains("\"tca/up/gait/*\""), "{text}");
         assert!(!text.contains("tca/up/*"), "{text}");
         // It is a configuration zenoh takes.
         let mut config = zenoh::Config::default();
         config.insert_json5("access_control", &text).unwrap();
+    }
+
+    #[test]
+    fn one_authenticator_makes_one_subject_per_identity() {
+        for (by, key) in [
+            (
+                Authenticators {
+                    users: true,
+                    certificates: false,
+                },
+                "usernames",
+            ),
+            (
+                Authenticators {
+                    users: false,
+                    certificates: true,
+                },
+                "cert_common_names",
+            ),
+        ] {
+            let acl = access_control(&["gait".into(), "ltm".into()], by).unwrap();
+            let subjects = acl["subjects"].as_array().unwrap();
+            assert_eq!(subjects.len(), 2);
+            assert_eq!(subjects[1][key], json!(["ltm"]));
+            assert!(subjects[1].get("link_protocols").is_none(), "{acl}");
+        }
     }
 
     #[test]

@@ -43,7 +43,7 @@ async fn start(policy: String, listen: String, log: &Path) -> RunningCentral {
         listen: vec![listen],
         insecure: false,
         journal: None,
-        previous_log: None,
+        keep_previous_log: false,
     })
     .await
     .unwrap()
@@ -280,4 +280,50 @@ async fn identities_from_certificates_over_mutual_tls() {
         |identity: &str| Connector::zenoh_with_tls(&endpoint, identities[identity].clone());
     // The refused module above opened one link of its own, and was refused on it.
     check_isolation(central, &log, connector_for, spy, 2).await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn one_identitys_login_with_anothers_certificate_gets_neither() {
+    let dir = tempfile::tempdir().unwrap();
+    let ca = TestCa::new(dir.path(), "tca");
+    let central_files = ca.central();
+    let users = dir.path().join("users.txt");
+    std::fs::write(&users, "echo:zp-echo\nasker:zp-asker\nspy:zp-spy\n").unwrap();
+    let policy = format!(
+        "[transport]\nzenoh_users_file = {:?}\n\
+         [transport.tls]\ncertificate = {:?}\nprivate_key = {:?}\nca = {:?}\n{POLICY}",
+        users.display().to_string(),
+        central_files.certificate.display().to_string(),
+        central_files.private_key.display().to_string(),
+        central_files.ca.display().to_string(),
+    );
+    let port = tca_testkit::free_port();
+    let endpoint = format!("tls/127.0.0.1:{port}");
+    let log = dir.path().join("traffic.mcap");
+    let central = start(policy, endpoint.clone(), &log).await;
+    // The spy holds its own password and asker's certificate: as user "spy" and as common
+    // name "asker" it would match both identities' subjects.
+    let spy_login = ZenohLogin::new("spy", "zp-spy");
+    let asker_files = ca.module("asker");
+    let spy = Spy::open(
+        client_config_secured(
+            std::slice::from_ref(&endpoint),
+            Some(&spy_login),
+            Some(&asker_files),
+        )
+        .unwrap(),
+    )
+    .await;
+    let identities: std::collections::HashMap<&str, TlsFiles> =
+        [("echo", ca.module("echo")), ("asker", asker_files.clone())].into();
+    let connector_for = |identity: &str| {
+        Connector::new(
+            tca_link::zenoh::ZenohTransport::with_login(
+                vec![endpoint.clone()],
+                ZenohLogin::new(identity, format!("zp-{identity}")),
+            )
+            .tls(identities[identity].clone()),
+        )
+    };
+    check_isolation(central, &log, connector_for, spy, 0).await;
 }

@@ -73,10 +73,6 @@ impl Up {
 /// built-in modules run as `exe module NAME`. An earlier traffic log at central's log path is
 /// kept (see `tca_logs::set_aside`).
 pub async fn up(launch: &Launch, exe: &Path) -> Result<Up, LaunchError> {
-    let kept_log = match &launch.central.log {
-        Some(log) => tca_logs::set_aside(log)?,
-        None => None,
-    };
     let policy = match &launch.central.policy {
         Some(path) => Some(Arc::new(Policy::load(path)?)),
         None => None,
@@ -104,9 +100,10 @@ pub async fn up(launch: &Launch, exe: &Path) -> Result<Up, LaunchError> {
             ..CentralConfig::default()
         },
         journal: launch.central.journal.clone(),
-        previous_log: kept_log.clone(),
+        keep_previous_log: true,
     })
     .await?;
+    let kept_log = central.kept_log().map(Path::to_path_buf);
     tracing::info!(endpoints = ?listen, modules = %endpoint, "central listening");
     let (stop, stop_rx) = watch::channel(false);
     let mut supervisors = Vec::new();
