@@ -1,8 +1,8 @@
 //! FootFall's operator loop across the telemetry bridge, on one machine: the rover (sagging)
 //! with FootFall's executor behind the robot-side central, FootFall's planner and the
 //! telemetry monitor behind the ground-side central, the bridge between them with a delay
-//! each way. Every step is picked from the leg's maps, planned, carried out and lands where
-//! it was aimed; every delay is the setting or a little more; the bridge's log played back
+//! each way. Every step is picked from the leg's maps, planned, carried out and lands near
+//! where it was aimed; every delay is the setting or a little more; the bridge's log played back
 //! gives the same telemetry.
 
 use std::time::Duration;
