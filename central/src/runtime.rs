@@ -914,8 +914,9 @@ async fn drive(
         } else {
             d.records.clear();
         }
+        finish_rewrite(&mut d);
         if d.journal.as_ref().is_some_and(Journal::wants_rewrite) {
-            rewrite_journal(&mut d, log.as_mut()).await;
+            rewrite_journal(&mut d, log.as_mut());
         }
     }
     d.settle(now_ns());
@@ -934,30 +935,45 @@ async fn drive(
     Ok(final_stats)
 }
 
-/// Rewrites the journal as central's state now, once the traffic log has written every record
-/// handed to it (the new head says how many: a restart counts on them being in the log).
-async fn rewrite_journal(d: &mut Driver, log: Option<&mut LogSink>) {
-    let logged = match log {
-        Some(l) => {
-            flushed(l.flush()).await;
-            Some(d.logged)
-        }
-        None => None,
+/// Starts rewriting the journal as central's state now; the new head is put in place once
+/// the traffic log has written every record handed to it (the new head says how many: a
+/// restart counts on them being in the log), off central's thread (see
+/// `Journal::start_rewrite`).
+fn rewrite_journal(d: &mut Driver, log: Option<&mut LogSink>) {
+    let (logged, log_flushed) = match log {
+        Some(l) => (Some(d.logged), Some(l.flush())),
+        None => (None, None),
     };
     let Some(journal) = d.journal.as_mut() else {
         return;
     };
     let result = crate::journal::head(&d.core, journal.id(), logged, Vec::new())
         .map_err(|reason| reason.to_string())
-        .and_then(|head| journal.rewrite(&head).map_err(|e| e.to_string()));
+        .and_then(|head| {
+            journal
+                .start_rewrite(&head, log_flushed)
+                .map_err(|e| e.to_string())
+        });
     if let Err(e) = result {
-        tracing::error!(
-            error = %e,
-            "the journal cannot be rewritten; central goes on without it, and a crash now loses \
-             its task trees"
-        );
-        d.journal = None;
+        journal_lost(d, &e);
     }
+}
+
+/// Puts a finished rewrite of the journal in place, if one is under way and done.
+fn finish_rewrite(d: &mut Driver) {
+    if let Some(Err(e)) = d.journal.as_mut().and_then(Journal::finish_rewrite) {
+        journal_lost(d, &e.to_string());
+    }
+}
+
+/// The journal could not be rewritten: central goes on without it.
+fn journal_lost(d: &mut Driver, error: &str) {
+    tracing::error!(
+        error = %error,
+        "the journal cannot be rewritten; central goes on without it, and a crash now loses \
+         its task trees"
+    );
+    d.journal = None;
 }
 
 fn stats(core: &Central) -> Stats {
