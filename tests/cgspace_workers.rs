@@ -149,8 +149,10 @@ async fn worker_processes_over_zenoh_answer_the_joins() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn tca_plan_cgspace_with_workers_plans_the_route_on_worker_processes() {
+    let (space, s, g) = cliff();
+    // The route alone: the batched roadmap's, whoever runs its joins.
     let (status, stdout, stderr) = run_tca(
-        "tca plan cgspace --workers 2",
+        "tca plan cgspace --workers 2 --route-only",
         &[
             "plan",
             "cgspace",
@@ -160,6 +162,7 @@ async fn tca_plan_cgspace_with_workers_plans_the_route_on_worker_processes() {
             "cliff",
             "--workers",
             "2",
+            "--route-only",
             "--json",
         ],
         Duration::from_secs(60),
@@ -170,7 +173,6 @@ async fn tca_plan_cgspace_with_workers_plans_the_route_on_worker_processes() {
     assert_eq!(v["planned"], true, "{v}");
     assert_eq!(v["workers"], 2);
     assert_eq!(v["replacements"], 0);
-    let (space, s, g) = cliff();
     let mut local_space = space.clone();
     let local = plan_route_batched(
         &mut local_space,
@@ -188,6 +190,66 @@ async fn tca_plan_cgspace_with_workers_plans_the_route_on_worker_processes() {
     );
     let per_worker = v["joins_per_worker"].as_array().expect("joins per worker");
     assert!(per_worker.iter().all(|j| j.as_u64() > Some(0)), "{v}");
+
+    // The route and its footfalls: the same plan as one made here with the joins run
+    // locally, the cells the foot-level search marked sent to the workers with each batch.
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let png_dir = dir.path().to_str().expect("a UTF-8 path");
+    let (status, stdout, stderr) = run_tca(
+        "tca plan cgspace --workers 2",
+        &[
+            "plan",
+            "cgspace",
+            "--robot",
+            "ambler",
+            "--terrain",
+            "cliff",
+            "--workers",
+            "2",
+            "--png",
+            png_dir,
+            "--json",
+        ],
+        Duration::from_secs(120),
+    )
+    .await;
+    assert!(status.success(), "{stdout}\n{stderr}");
+    let line = stdout.lines().last().unwrap_or_default();
+    let v: serde_json::Value = serde_json::from_str(line).expect("one JSON line");
+    assert_eq!(v["planned"], true, "{v}");
+    let course = Course::builtin("cliff", 1).expect("the cliff course");
+    let mut local_space = space.clone();
+    let plan = tokio::task::spawn_blocking(move || {
+        tca_cg_space::plan_with(
+            &mut local_space,
+            (
+                tca_rrt::nalgebra::Point2::new(course.start.x_m, course.start.y_m),
+                course.start.yaw_rad,
+            ),
+            (course.goal, course.start.yaw_rad),
+            None,
+            &tca_cg_space::PlanParams::default(),
+            None,
+            &mut tca_cg_space::JoinedRoutes {
+                joiner: LocalJoiner,
+                batch: BatchParams::default(),
+            },
+        )
+    })
+    .await
+    .expect("the planning thread")
+    .expect("a local plan");
+    assert_eq!(
+        v["route_cells"].as_u64(),
+        Some(plan.feet.route.len() as u64),
+        "{v}"
+    );
+    assert_eq!(v["cells_marked"].as_u64(), Some(plan.marked.len() as u64));
+    assert_eq!(v["routes_planned"].as_u64(), Some(plan.routes as u64));
+    let footfalls = v["footfalls"].as_array().expect("footfalls");
+    assert!(!footfalls.is_empty(), "{v}");
+    assert!(v["joins"].as_u64() > Some(0), "{v}");
+    assert!(dir.path().join("cgspace-1.png").exists());
 
     // Refused with the reason: more workers than strips, a central that is not there.
     let (status, _, stderr) = run_tca(

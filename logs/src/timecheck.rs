@@ -169,22 +169,24 @@ fn check_handlings(log: &LogFile, check: &mut TimeCheck) {
                 let Ok(env) = LogFile::envelope(f) else {
                     continue;
                 };
+                // A hello names its module itself: it comes before the link has one.
+                if f.direction == Direction::In {
+                    match ControlRequest::decode(env.name.as_str(), &env.data) {
+                        Ok(ControlRequest::Hello(h)) => {
+                            capacity.insert(h.module, h.capacity.max(1));
+                        }
+                        Ok(ControlRequest::HelloAuth(a)) => {
+                            capacity.insert(a.hello.module, a.hello.capacity.max(1));
+                        }
+                        _ => {}
+                    }
+                }
                 let Some(peer) = f.peer.clone().or_else(|| link_module.get(&f.link).cloned())
                 else {
                     continue;
                 };
                 match f.direction {
                     Direction::In => {
-                        if let Ok(ControlRequest::Hello(h)) =
-                            ControlRequest::decode(env.name.as_str(), &env.data)
-                        {
-                            capacity.insert(h.module, h.capacity.max(1));
-                        }
-                        if let Ok(ControlRequest::HelloAuth(a)) =
-                            ControlRequest::decode(env.name.as_str(), &env.data)
-                        {
-                            capacity.insert(a.hello.module, a.hello.capacity.max(1));
-                        }
                         if matches!(env.class, Class::Reply | Class::Success | Class::Failure)
                             && let Some(c) = env.correlation
                         {

@@ -4,6 +4,8 @@ use std::io::IsTerminal as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+use anyhow::Context as _;
+
 use tca_legged_walk::walk::Progress;
 use tca_legged_walk::{LeggedPlanner, LeggedTerrain, LeggedWalkOptions};
 use tokio::sync::mpsc;
@@ -183,6 +185,25 @@ fn options_of(args: &WalkArgs) -> anyhow::Result<LeggedWalkOptions> {
             .map(super::foxglove::live_attachment)
             .transpose()?,
         sag: None,
+        cg_plan: None,
+        cg_workers: match args.workers {
+            None => None,
+            Some(n) => {
+                if args.planner != "cgspace" {
+                    anyhow::bail!(
+                        "--workers {n} runs the CG-space planner's joins; walk with --planner cgspace"
+                    );
+                }
+                Some(tca_legged_walk::WalkWorkers {
+                    count: n as usize,
+                    region_cap: args.region_cap,
+                    program: Some(
+                        std::env::current_exe()
+                            .context("cannot find this program to start the CG-space workers")?,
+                    ),
+                })
+            }
+        },
     })
 }
 

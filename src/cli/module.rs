@@ -92,6 +92,11 @@ pub(crate) struct ModuleArgs {
     /// beyond it the least recently used is dropped and recomputed when needed again.
     #[arg(long, value_name = "N")]
     region_cap: Option<usize>,
+    /// cgspace-worker: the planner's CG-space layout as JSON (the fields of
+    /// `tca_cg_space::CgParams`; default: the paper's). A walk's planner (`tca walk --planner
+    /// cgspace --workers N`) gives its own, which differs in heading bins and margins.
+    #[arg(long, value_name = "JSON")]
+    cg_params: Option<String>,
     /// Navigation modules: odometry drift, percent of the distance travelled.
     #[arg(long, default_value_t = 1.25)]
     drift: f64,
@@ -157,9 +162,9 @@ pub(crate) async fn run(args: ModuleArgs) -> anyhow::Result<ExitCode> {
     if args.name.starts_with("footfall-") {
         return run_footfall_module(&args, &connector, &endpoint).await;
     }
-    if args.index.is_some() || args.region_cap.is_some() {
+    if args.index.is_some() || args.region_cap.is_some() || args.cg_params.is_some() {
         anyhow::bail!(
-            "--index and --region-cap are for the CG-space worker (tca module cgspace-worker), not {}",
+            "--index, --region-cap and --cg-params are for the CG-space worker (tca module cgspace-worker), not {}",
             args.name
         );
     }
@@ -301,7 +306,12 @@ async fn run_cgspace_worker(
     let setup = tca_cg_space_bus::WorkerSetup {
         robot,
         terrain: tca_cg_space_bus::TerrainSource::parse(&terrain, args.seed),
-        params: tca_cg_space::CgParams::default(),
+        params: match &args.cg_params {
+            None => tca_cg_space::CgParams::default(),
+            Some(text) => serde_json::from_str(text).with_context(|| {
+                format!("--cg-params {text:?} is not a CG-space layout (the JSON of tca_cg_space::CgParams)")
+            })?,
+        },
         region_cap: args.region_cap,
     };
     let built = setup.clone();

@@ -43,6 +43,7 @@ pub(crate) enum PlanCommand {
   tca plan cgspace --robot ambler --terrain walled-goal        # no route: exit status 2
   tca plan cgspace --robot robot.urdf --terrain field.asc --from 2,2 --to 20,5,1.57 --seeds 1..5
   tca plan cgspace --robot ambler --terrain cliff --workers 3      # the route's joins on 3 worker processes
+  tca plan cgspace --robot ambler --terrain cliff --workers 3 --route-only   # the route alone
 
 The picture (DIR/cgspace-SEED.png) shows the elevation in grey, foot cells without traction
 as red circles, invalid CG cells in black (--theta all: black where every heading is
@@ -83,11 +84,16 @@ pub(crate) struct CgSpaceArgs {
     /// Print each plan as one JSON line.
     #[arg(long)]
     json: bool,
-    /// Plan the route only, its roadmap's A* joins on N worker processes (`tca module
-    /// cgspace-worker`, started and stopped by this command), each owning a strip of
-    /// CG-space under a region cap.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=256), conflicts_with_all = ["seeds", "png"])]
+    /// The route's roadmap joins on N worker processes (`tca module cgspace-worker`, started
+    /// and stopped by this command), each owning a strip of CG-space under a region cap; the
+    /// footfalls are searched here, and every route replanned after the search marked a
+    /// cell is planned on the workers again, the marked cells sent with each batch.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=256), conflicts_with = "seeds")]
     workers: Option<u32>,
+    /// With --workers: plan the route alone, without the footfalls (what the distributed
+    /// benchmark times).
+    #[arg(long, requires = "workers")]
+    route_only: bool,
     /// With --workers: the central the planner and the workers join (default: one started
     /// in this process on a free loopback port).
     #[arg(long, value_name = "ENDPOINT", requires = "workers")]
@@ -555,9 +561,11 @@ async fn run_cgspace_workers(args: CgSpaceArgs, workers: usize) -> anyhow::Resul
         (None, Some((_, g))) => [g[0], g[1], start[2]],
         (None, None) => anyhow::bail!("--to X,Y is needed with a terrain file"),
     };
+    let built = Instant::now();
     let space = CgSpace::for_model(&model, &field, CgParams::default()).map_err(|e| {
         anyhow::anyhow!("--robot {} on --terrain {}: {e}", args.robot, args.terrain)
     })?;
+    let space_s = built.elapsed().as_secs_f64();
     let grid = *space.grid();
     check_inside("from", "the start", &grid, Point2::new(start[0], start[1]))?;
     check_inside("to", "the goal", &grid, Point2::new(goal[0], goal[1]))?;
@@ -624,17 +632,34 @@ async fn run_cgspace_workers(args: CgSpaceArgs, workers: usize) -> anyhow::Resul
     };
     let mut joiner = joiner.map_err(|e| anyhow::anyhow!("--workers {workers}: {e}"))?;
     let began = Instant::now();
+    let route_only = args.route_only;
     let (result, joiner, space) = tokio::task::spawn_blocking(move || {
         let mut space = space;
-        let r = tca_cg_space::plan_route_batched(
-            &mut space,
-            &mut joiner,
-            s,
-            g,
-            &route_params,
-            &tca_cg_space::BatchParams::default(),
-        );
-        (r, joiner, space)
+        let batch = tca_cg_space::BatchParams::default();
+        let result = if route_only {
+            tca_cg_space::plan_route_batched(&mut space, &mut joiner, s, g, &route_params, &batch)
+                .map(Planned::Route)
+                .map_err(|e| e.to_string())
+        } else {
+            let params = PlanParams {
+                route: route_params,
+                ..PlanParams::default()
+            };
+            let mut routes = tca_cg_space::JoinedRoutes { joiner, batch };
+            let r = tca_cg_space::plan_with(
+                &mut space,
+                (Point2::new(start[0], start[1]), start[2]),
+                (Point2::new(goal[0], goal[1]), goal[2]),
+                None,
+                &params,
+                None,
+                &mut routes,
+            );
+            joiner = routes.joiner;
+            r.map(|p| Planned::Footfalls(Box::new(p)))
+                .map_err(|e| e.to_string())
+        };
+        (result, joiner, space)
     })
     .await
     .context("the planning thread stopped")?;
@@ -663,8 +688,24 @@ async fn run_cgspace_workers(args: CgSpaceArgs, workers: usize) -> anyhow::Resul
         .map(u64::to_string)
         .collect::<Vec<_>>()
         .join("/");
+    let workers_json = json!({
+        "workers": workers, "region_cap": caps, "batches": stats.batches,
+        "joins_per_worker": stats.queries_per_worker,
+        "replacements": stats.replacements,
+        "worker_cells_evaluated": stats.cells_evaluated(),
+        "worker_regions_materialised": stats.regions_materialised(),
+        "planner_cells_evaluated": space.evaluations(),
+    });
+    let on_workers = format!(
+        "{} batches of joins on {workers} workers ({per_worker} joins), {} workers replaced; the workers evaluated {} CG cells in {} regions (cap {caps} each), the planner {}",
+        stats.batches,
+        stats.replacements,
+        stats.cells_evaluated(),
+        stats.regions_materialised(),
+        space.evaluations(),
+    );
     let planned = match &result {
-        Ok(route) => {
+        Ok(Planned::Route(route)) => {
             let length = route_length_m(&grid, &route.cells);
             if args.json {
                 let cells: Vec<[f64; 3]> = route
@@ -675,31 +716,45 @@ async fn run_cgspace_workers(args: CgSpaceArgs, workers: usize) -> anyhow::Resul
                         [p.x, p.y, grid.theta(c.it)]
                     })
                     .collect();
-                println!(
-                    "{}",
-                    json!({
-                        "seed": seed, "planned": true, "workers": workers, "region_cap": caps,
-                        "route_cells": route.cells.len(), "route_length_m": length,
-                        "draws": route.draws, "joins": route.searches, "batches": stats.batches,
-                        "joins_per_worker": stats.queries_per_worker,
-                        "replacements": stats.replacements,
-                        "worker_cells_evaluated": stats.cells_evaluated(),
-                        "worker_regions_materialised": stats.regions_materialised(),
-                        "planner_cells_evaluated": space.evaluations(),
-                        "time_s": time_s, "route": cells,
-                    })
-                );
+                let mut v = json!({
+                    "seed": seed, "planned": true, "route_only": true,
+                    "route_cells": route.cells.len(), "route_length_m": length,
+                    "draws": route.draws, "joins": route.searches,
+                    "time_s": time_s, "route": cells,
+                });
+                merge(&mut v, &workers_json);
+                println!("{v}");
             } else {
                 println!(
-                    "seed {seed}: route of {} cells, {length:.2} m; {} draws, {} joins in {} batches on {workers} workers ({per_worker}), {} workers replaced; the workers evaluated {} CG cells in {} regions (cap {caps} each), the planner {}; planned in {time_s:.3} s (footfalls: without --workers)",
+                    "seed {seed}: route of {} cells, {length:.2} m; {} draws, {} joins; {on_workers}; planned in {time_s:.3} s",
                     route.cells.len(),
                     route.draws,
                     route.searches,
-                    stats.batches,
-                    stats.replacements,
-                    stats.cells_evaluated(),
-                    stats.regions_materialised(),
-                    space.evaluations(),
+                );
+            }
+            true
+        }
+        Ok(Planned::Footfalls(plan)) => {
+            let work = CgWork {
+                evaluated: space.evaluations(),
+                regions: space.regions_materialised(),
+                time_s,
+                space_s,
+            };
+            if args.json {
+                let mut v = cg_plan_json(seed, &space, plan, &work);
+                merge(&mut v, &workers_json);
+                v["joins"] = json!(stats.queries);
+                println!("{v}");
+            } else {
+                println!(
+                    "seed {seed}: route of {} cells, {:.2} m; {} foot moves, {} search nodes, {} routes planned, {} cells marked; {on_workers}; planned in {time_s:.3} s",
+                    plan.feet.route.len(),
+                    route_length_m(&grid, &plan.feet.route),
+                    foot_moves(plan),
+                    plan.feet.nodes,
+                    plan.routes,
+                    plan.marked.len(),
                 );
             }
             true
@@ -708,24 +763,66 @@ async fn run_cgspace_workers(args: CgSpaceArgs, workers: usize) -> anyhow::Resul
             if args.json {
                 println!(
                     "{}",
-                    json!({ "seed": seed, "planned": false, "workers": workers, "reason": e.to_string(), "replacements": stats.replacements, "time_s": time_s })
+                    json!({ "seed": seed, "planned": false, "workers": workers, "reason": e, "replacements": stats.replacements, "time_s": time_s })
                 );
             } else {
-                let what = if e.to_string().starts_with("no route") {
+                let what = if e.starts_with("no route") {
                     ""
                 } else {
-                    "no route planned: "
+                    "no plan: "
                 };
                 println!("seed {seed}: {what}{e}");
             }
             false
         }
     };
+    if let Some(dir) = &args.png {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create the directory {}", dir.display()))?;
+        let path = dir.join(format!("cgspace-{seed}.png"));
+        let picture = PictureOptions {
+            theta: parse_theta(&args.theta)?,
+            start: Some(Point2::new(start[0], start[1])),
+            goal: Some(Point2::new(goal[0], goal[1])),
+            label: Some(format!(
+                "{} {} seed {seed}, {workers} workers",
+                args.robot, args.terrain
+            )),
+            ..PictureOptions::default()
+        };
+        let mut space = space;
+        let plan = match &result {
+            Ok(Planned::Footfalls(p)) => Some(p.as_ref()),
+            _ => None,
+        };
+        write_cg_space_png(&path, &mut space, &picture, plan)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+        if !args.json {
+            println!("seed {seed}: picture {}", path.display());
+        }
+    }
     Ok(if planned {
         ExitCode::SUCCESS
     } else {
         ExitCode::from(2)
     })
+}
+
+/// What `tca plan cgspace --workers` planned.
+enum Planned {
+    /// The route alone (`--route-only`).
+    Route(tca_cg_space::Route),
+    /// The route and its footfalls.
+    Footfalls(Box<tca_cg_space::Plan>),
+}
+
+/// Copies `extra`'s fields into the JSON object `into`.
+fn merge(into: &mut serde_json::Value, extra: &serde_json::Value) {
+    if let (Some(into), Some(extra)) = (into.as_object_mut(), extra.as_object()) {
+        for (k, v) in extra {
+            into.insert(k.clone(), v.clone());
+        }
+    }
 }
 
 /// The CG-space's work for one plan.

@@ -62,6 +62,15 @@ pub(crate) struct WalkArgs {
     /// With --planner rrt: the gait of its moves, `tripod` (default) or `wave`.
     #[arg(long, value_name = "tripod|wave", requires = "robot")]
     pub(crate) gait: Option<String>,
+    /// With --planner cgspace: run the route's roadmap joins on N worker processes (`tca
+    /// module cgspace-worker`, each owning a strip of CG-space), started and stopped by this
+    /// walk; central then also listens on a free loopback port for them.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=64), requires = "robot", conflicts_with = "connect")]
+    pub(crate) workers: Option<u32>,
+    /// With --workers: most CG-space regions (16 x 16 cells, every heading) each worker
+    /// holds at once (default: no cap).
+    #[arg(long, value_name = "N", requires = "workers")]
+    pub(crate) region_cap: Option<usize>,
     /// With --robot: walk once per seed in FIRST..LAST (e.g. 1..5), each in DIR/seed-N, and
     /// print one line per walk and a tally (exit status 0 only when every walk reached its
     /// goal with no fall and no collision).

@@ -113,8 +113,9 @@ impl WorkerFactory for InProcessWorkers {
 
 /// Workers as processes: `program ARGS... --index K` for worker K (e.g. the `tca` binary
 /// with `module cgspace-worker --connect ENDPOINT --robot R --terrain F`). Each is killed
-/// when its handle is dropped; what it last wrote on its standard error is kept, to say why
-/// it ended.
+/// when its handle is dropped, and (as the `tca` binary's modules do when started with
+/// [`tca_launch::LAUNCHER_PID_ENV`] set) stops by itself within half a second of this
+/// process ending; what it last wrote on its standard error is kept, to say why it ended.
 #[derive(Debug, Clone)]
 pub struct ProcessWorkers {
     program: PathBuf,
@@ -184,6 +185,9 @@ impl WorkerFactory for ProcessWorkers {
             let mut child = tokio::process::Command::new(&self.program)
                 .args(&self.args)
                 .args(["--index", &index.to_string()])
+                // A worker whose planner has gone (even killed with SIGKILL, which drops no
+                // handle) notices and stops.
+                .env(tca_launch::LAUNCHER_PID_ENV, std::process::id().to_string())
                 .stdin(Stdio::null())
                 .stdout(Stdio::null())
                 .stderr(Stdio::piped())
@@ -307,7 +311,9 @@ struct Slot {
 }
 
 struct Shared {
-    module: Module,
+    /// The module the joins are asked from: the planner's own, or a handler's (see
+    /// [`DistributedJoiner::ask_as`]).
+    module: Mutex<Module>,
     workers: usize,
     factory: Arc<dyn WorkerFactory>,
     slots: Vec<tokio::sync::Mutex<Slot>>,
@@ -346,7 +352,7 @@ impl DistributedJoiner {
             return Err(JoinError::new("give at least one CG-space worker"));
         }
         let shared = Arc::new(Shared {
-            module,
+            module: Mutex::new(module),
             workers,
             factory: Arc::new(factory),
             slots: (0..workers)
@@ -378,6 +384,19 @@ impl DistributedJoiner {
             runtime: Handle::current(),
             print: None,
         })
+    }
+
+    /// Asks the joins (and whether the workers are still there) through `module` from now
+    /// on: a handler's context ([`tca_module::Context::module`]), so that on central's
+    /// simulated clock the joins are that handler's own queries and the handler counts as
+    /// waiting for them. (Asked from another module while a handler plans, they would wait
+    /// in central's queue until that handler ended.)
+    pub fn ask_as(&self, module: Module) {
+        *self
+            .shared
+            .module
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner) = module;
     }
 
     /// The number of workers.
@@ -500,6 +519,14 @@ impl Joiner for DistributedJoiner {
 }
 
 impl Shared {
+    /// The module the joins are asked from.
+    fn module(&self) -> Module {
+        self.module
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .clone()
+    }
+
     fn stats(&self) -> JoinStats {
         self.stats
             .lock()
@@ -514,7 +541,8 @@ impl Shared {
     /// Whether central has worker `k` connected with its query registered.
     async fn registered(&self, k: usize) -> Result<bool, ModuleError> {
         let name = join_name(k);
-        let registry = self.module.registry().await?;
+        let module = self.module();
+        let registry = module.registry().await?;
         Ok(registry
             .entries
             .iter()
@@ -598,9 +626,8 @@ impl Shared {
         let mut failures = 0u64;
         loop {
             let generation = self.generation(k);
-            let ask =
-                self.module
-                    .query_raw(&name, payload.clone(), Some(self.options.query_timeout));
+            let module = self.module();
+            let ask = module.query_raw(&name, payload.clone(), Some(self.options.query_timeout));
             tokio::pin!(ask);
             let mut watch = tokio::time::interval(self.options.watch_every);
             watch.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);

@@ -74,6 +74,13 @@ pub enum CgError {
         /// Which budget ran out.
         detail: String,
     },
+    /// The route planner's joins could not be run where they were sent (workers that cannot
+    /// be reached, replaced or that refused the batch).
+    #[error("the route could not be planned: {reason}")]
+    Joins {
+        /// What the joiner said.
+        reason: String,
+    },
     /// The foot-level search failed along every route it was given.
     #[error("no footfalls found along the route after {replans} replans: {detail}")]
     NoFootfalls {

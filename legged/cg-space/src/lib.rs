@@ -66,7 +66,10 @@ pub use picture::{
     Layout, PictureError, PictureOptions, draw_cg_space, footfalls, stances, start_stance,
     write_cg_space_png,
 };
-pub use planner::{Plan, PlanParams, Standing, plan, plan_checked};
+pub use planner::{
+    JoinedRoutes, LocalRoutes, Plan, PlanParams, RoutePlanner, Standing, plan, plan_checked,
+    plan_with,
+};
 pub use robot::{CgParams, CgRobot};
 pub use route::{Flood, Route, RouteParams, flood, plan_route, roadmap};
 pub use space::{CgSpace, REGION_CELLS};

@@ -5,6 +5,7 @@
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 
+use crate::distribute::{BatchParams, BatchedRouteError, Joiner, plan_route_batched};
 use crate::error::CgError;
 use crate::footplan::{
     FootCell, FootPlan, FootSearch, FootStep, MoveCheck, SearchCounts, SearchFailure, SearchParams,
@@ -76,6 +77,63 @@ pub fn plan(
     plan_checked(space, start, goal, standing, params, None)
 }
 
+/// Where the planner's routes come from: the first one and each one after the feedback
+/// marked a cell.
+pub trait RoutePlanner {
+    /// A route from `start` to `goal` over the valid cells of `space` (the marked ones
+    /// included among the invalid).
+    fn route(
+        &mut self,
+        space: &mut CgSpace,
+        start: CgCell,
+        goal: CgCell,
+        params: &RouteParams,
+    ) -> Result<Route, CgError>;
+}
+
+/// Routes planned in the planner's own space by [`plan_route`].
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LocalRoutes;
+
+impl RoutePlanner for LocalRoutes {
+    fn route(
+        &mut self,
+        space: &mut CgSpace,
+        start: CgCell,
+        goal: CgCell,
+        params: &RouteParams,
+    ) -> Result<Route, CgError> {
+        plan_route(space, start, goal, params)
+    }
+}
+
+/// Routes planned by [`plan_route_batched`], the roadmap's joins run by a [`Joiner`] (on
+/// workers, for one): the cells the feedback marks travel with every batch.
+#[derive(Debug)]
+pub struct JoinedRoutes<J> {
+    /// Runs the roadmap's joins.
+    pub joiner: J,
+    /// How the roadmap draws its points.
+    pub batch: BatchParams,
+}
+
+impl<J: Joiner> RoutePlanner for JoinedRoutes<J> {
+    fn route(
+        &mut self,
+        space: &mut CgSpace,
+        start: CgCell,
+        goal: CgCell,
+        params: &RouteParams,
+    ) -> Result<Route, CgError> {
+        plan_route_batched(space, &mut self.joiner, start, goal, params, &self.batch).map_err(|e| {
+            match e {
+                BatchedRouteError::Plan(e) => e,
+                BatchedRouteError::Join(e) => CgError::Joins { reason: e.reason },
+            }
+        })
+    }
+}
+
 /// [`plan`] with every move the foot-level search considers also put to `check` (see
 /// [`MoveCheck`]).
 pub fn plan_checked(
@@ -85,6 +143,27 @@ pub fn plan_checked(
     standing: Option<&Standing>,
     params: &PlanParams,
     check: Option<&dyn MoveCheck>,
+) -> Result<Plan, CgError> {
+    plan_with(
+        space,
+        start,
+        goal,
+        standing,
+        params,
+        check,
+        &mut LocalRoutes,
+    )
+}
+
+/// [`plan_checked`] with its routes (the first and every replanned one) from `routes`.
+pub fn plan_with(
+    space: &mut CgSpace,
+    start: (Point2<f64>, f64),
+    goal: (Point2<f64>, f64),
+    standing: Option<&Standing>,
+    params: &PlanParams,
+    check: Option<&dyn MoveCheck>,
+    routes_from: &mut dyn RoutePlanner,
 ) -> Result<Plan, CgError> {
     let grid = *space.grid();
     let cell = |what: &'static str, p: Point2<f64>, theta: f64| {
@@ -103,7 +182,7 @@ pub fn plan_checked(
     };
     let s = cell("the start", start.0, start.1)?;
     let g = cell("the goal", goal.0, goal.1)?;
-    let first_route = plan_route(space, s, g, &params.route)?;
+    let first_route = routes_from.route(space, s, g, &params.route)?;
     let mut route = first_route.cells.clone();
     let mut marked = Vec::new();
     let mut routes = 1;
@@ -120,6 +199,10 @@ pub fn plan_checked(
         )
     });
     let mut counts = SearchCounts::default();
+    // The cells marked beside the ones the search stuck at, and whether marks are still
+    // widened so (see below).
+    let mut beside: Vec<CgCell> = Vec::new();
+    let mut widen = params.mark_radius > 0;
     let initial = stance.clone();
     let mut first_stance: Option<Stance> = initial.clone();
     loop {
@@ -202,7 +285,8 @@ pub fn plan_checked(
                     furthest = fail.furthest,
                     "foot search stuck; cell marked invalid"
                 );
-                let r = params.mark_radius.max(0);
+                space.mark_invalid(bad);
+                let r = if widen { params.mark_radius.max(0) } else { 0 };
                 for dy in -r..=r {
                     for dx in -r..=r {
                         let c = CgCell::new(bad.ix + dx, bad.iy + dy, bad.it);
@@ -210,12 +294,14 @@ pub fn plan_checked(
                         // beside it stay usable (marking those would wall the goal in).
                         let by_goal =
                             c.it == g.it && (c.ix - g.ix).abs() <= 1 && (c.iy - g.iy).abs() <= 1;
-                        if c == bad
-                            || (!by_goal
-                                && space.grid().contains(c)
-                                && !route[..=fail.furthest].contains(&c))
+                        if c != bad
+                            && !by_goal
+                            && space.grid().contains(c)
+                            && !space.marked().contains(&c)
+                            && !route[..=fail.furthest].contains(&c)
                         {
                             space.mark_invalid(c);
+                            beside.push(c);
                         }
                     }
                 }
@@ -229,7 +315,7 @@ pub fn plan_checked(
                     prefix.push(*st);
                 }
                 let here = route[fail.furthest];
-                let rest = plan_route(space, here, g, &params.route);
+                let rest = routes_from.route(space, here, g, &params.route);
                 routes += 1;
                 match rest {
                     Ok(r) => {
@@ -242,7 +328,29 @@ pub fn plan_checked(
                     }
                     Err(CgError::Unreachable { .. }) | Err(CgError::InvalidEndpoint { .. }) => {
                         // From here there is no way on: replan from the start.
-                        let r = plan_route(space, s, g, &params.route)?;
+                        let r = match routes_from.route(space, s, g, &params.route) {
+                            Ok(r) => r,
+                            Err(CgError::Unreachable { .. } | CgError::InvalidEndpoint { .. })
+                                if !beside.is_empty() =>
+                            {
+                                // The cells marked beside those the search stuck at may be
+                                // what walls the start or the goal in (a narrow ramp): take
+                                // them back, mark only such cells from now on, and try again.
+                                tracing::debug!(
+                                    taken_back = beside.len(),
+                                    "the widened marks walled the way in; keeping the stuck cells only"
+                                );
+                                for c in beside.drain(..) {
+                                    if !marked.contains(&c) {
+                                        space.unmark(c);
+                                    }
+                                }
+                                widen = false;
+                                routes += 1;
+                                routes_from.route(space, s, g, &params.route)?
+                            }
+                            Err(e) => return Err(e),
+                        };
                         routes += 1;
                         route = r.cells;
                         kept.clear();

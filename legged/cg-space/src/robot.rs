@@ -151,7 +151,8 @@ pub struct HeadingTable {
 }
 
 /// How a robot's CG-space is laid out; the defaults follow the paper.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CgParams {
     /// Side of a CG cell, metres; `None`: the smallest foot's footprint (its diameter), at
     /// least the terrain's resolution.

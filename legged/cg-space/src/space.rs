@@ -211,6 +211,11 @@ impl CgSpace {
         self.marked.insert(c);
     }
 
+    /// Takes a mark back: the cell is judged by its own verdict again.
+    pub fn unmark(&mut self, c: CgCell) {
+        self.marked.remove(&c);
+    }
+
     /// Marks a foot cell unusable (a foothold found unusable by other means, such as a
     /// swing to it that cannot be carried out): the CG cells' verdicts are evaluated again.
     pub fn forbid_foot(&mut self, ix: i32, iy: i32) {

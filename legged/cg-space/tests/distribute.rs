@@ -125,3 +125,116 @@ fn a_different_terrain_has_a_different_fingerprint() {
         fingerprint(&a.clone().with_region_cap(Some(3)))
     );
 }
+
+/// A joiner that runs every query locally and counts what it was given.
+#[derive(Default)]
+struct Counting {
+    queries: usize,
+    most_marked: usize,
+}
+
+impl Joiner for Counting {
+    fn join(&mut self, space: &mut CgSpace, queries: &[JoinQuery]) -> Result<Joins, JoinError> {
+        self.queries += queries.len();
+        self.most_marked = self.most_marked.max(space.marked().len());
+        LocalJoiner.join(space, queries)
+    }
+}
+
+fn cliff_terrain() -> tca_robot::HeightField {
+    tca_legged_courses::Course::builtin("cliff", 1)
+        .expect("the cliff course")
+        .terrain
+}
+
+#[test]
+fn footfall_plans_take_their_routes_from_the_joiner() {
+    let t = cliff_terrain();
+    let mut space = ambler_space(&t);
+    let grid = *space.grid();
+    let mut params = tca_cg_space::PlanParams::default();
+    // A short flood, so that the roadmap (and so the joiner) finds the route.
+    params.route.flood_budget = 50;
+    let (from, to) = (Point2::new(4.0, 0.0), Point2::new(24.0, 0.0));
+    let mut routes = tca_cg_space::JoinedRoutes {
+        joiner: Counting::default(),
+        batch: BatchParams::default(),
+    };
+    let p = tca_cg_space::plan_with(
+        &mut space,
+        (from, 0.0),
+        (to, 0.0),
+        None,
+        &params,
+        None,
+        &mut routes,
+    )
+    .expect("a plan by the ramp");
+    assert!(routes.joiner.queries > 0, "the joiner was never asked");
+    // The first route is the batched roadmap's, as planned in a fresh space.
+    let mut fresh = ambler_space(&t);
+    let (s, g) = (
+        grid.cell_of(from, 0.0).expect("start"),
+        grid.cell_of(to, 0.0).expect("goal"),
+    );
+    let alone = plan_route_batched(
+        &mut fresh,
+        &mut LocalJoiner,
+        s,
+        g,
+        &params.route,
+        &BatchParams::default(),
+    )
+    .expect("a route");
+    assert_eq!(p.first_route.cells, alone.cells);
+    // Where the plan crosses the cliff's line it is on the ramp, and it ends at the goal.
+    for c in &p.feet.route {
+        let at = grid.centre(c.ix, c.iy);
+        if (at.x - 14.0).abs() < 1.0 {
+            assert!(at.y > 2.0, "the route crosses the cliff at {at:?}");
+        }
+    }
+    assert_eq!(p.feet.route.last(), Some(&g));
+    assert!(!p.feet.steps.is_empty());
+    // Every replanned route saw the cells marked before it.
+    if !p.marked.is_empty() {
+        assert!(p.routes > 1);
+        assert!(routes.joiner.most_marked > 0);
+    }
+}
+
+/// A joiner whose workers are gone.
+struct Gone;
+
+impl Joiner for Gone {
+    fn join(&mut self, _: &mut CgSpace, _: &[JoinQuery]) -> Result<Joins, JoinError> {
+        Err(JoinError::new(
+            "worker 2 died and could not be started again",
+        ))
+    }
+}
+
+#[test]
+fn a_joiner_that_fails_fails_the_plan_with_its_reason() {
+    let t = cliff_terrain();
+    let mut space = ambler_space(&t);
+    let mut params = tca_cg_space::PlanParams::default();
+    params.route.flood_budget = 50;
+    let e = tca_cg_space::plan_with(
+        &mut space,
+        (Point2::new(4.0, 0.0), 0.0),
+        (Point2::new(24.0, 0.0), 0.0),
+        None,
+        &params,
+        None,
+        &mut tca_cg_space::JoinedRoutes {
+            joiner: Gone,
+            batch: BatchParams::default(),
+        },
+    )
+    .expect_err("no route without the joins");
+    assert!(
+        matches!(&e, tca_cg_space::CgError::Joins { reason } if reason.contains("worker 2 died")),
+        "{e}"
+    );
+}

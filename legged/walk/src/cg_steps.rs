@@ -25,12 +25,15 @@ use std::time::Instant;
 
 use nalgebra::{Isometry3, Point2, Translation3, UnitQuaternion};
 use tca_cg_space::{
-    CgCell, CgError, CgGrid, CgParams, CgSpace, FootStep, MoveCheck, Plan, PlanParams, Stance,
-    Standing, apply_step, millimetres, plan_checked,
+    BatchParams, CgCell, CgError, CgGrid, CgParams, CgSpace, FootStep, JoinedRoutes, LocalRoutes,
+    MoveCheck, Plan, PlanParams, RoutePlanner, Stance, Standing, apply_step, millimetres,
+    plan_with,
 };
+use tca_cg_space_bus::DistributedJoiner;
 use tca_free_gait::terrain::GridView;
 use tca_free_gait::{FreeGait, GaitParams, GaitState, StepPlan};
 use tca_legged_model::RobotModel;
+use tca_module::Module;
 use tca_robot::HeightField;
 
 /// The robot is where a planned step starts when its body is within this share of a cell
@@ -56,6 +59,10 @@ pub struct CgSteps {
     gait: FreeGait,
     view: GridView,
     space: Mutex<CgSpace>,
+    /// The layout the space was built with (workers must build theirs the same).
+    cg: CgParams,
+    /// Runs the route's roadmap joins on worker modules, if there are any.
+    joiner: Option<Mutex<DistributedJoiner>>,
     params: PlanParams,
     lift_m: f64,
     /// The plan's steps still to come, each with the state it starts from.
@@ -110,7 +117,7 @@ impl CgSteps {
         }
         cg.leg_clearance_m.get_or_insert(gait.leg_clearance_m);
         cg.swing_rise_m.get_or_insert(2.0 * gait.clearance_m);
-        let space = CgSpace::for_model(&model, &terrain, cg).map_err(|e| e.to_string())?;
+        let space = CgSpace::for_model(&model, &terrain, cg.clone()).map_err(|e| e.to_string())?;
         let mut params = params;
         // A smaller budget hands a cell the robot cannot get past back to the route planner
         // sooner.
@@ -124,19 +131,41 @@ impl CgSteps {
             gait: FreeGait::new(model, gait),
             view: GridView::new(terrain),
             space: Mutex::new(space),
+            cg,
+            joiner: None,
             params,
             lift_m,
             queue: Mutex::new(VecDeque::new()),
         })
     }
 
+    /// Routes planned with their roadmap joins on workers, through `joiner`.
+    pub fn with_joiner(mut self, joiner: DistributedJoiner) -> Self {
+        self.joiner = Some(Mutex::new(joiner));
+        self
+    }
+
+    /// The layout the CG-space was built with.
+    pub fn cg_params(&self) -> &CgParams {
+        &self.cg
+    }
+
+    /// A fresh CG-space of the same robot tables, grid and foot map (what workers in this
+    /// process start from).
+    pub fn space_template(&self) -> CgSpace {
+        let space = self.space.lock().unwrap_or_else(|p| p.into_inner());
+        CgSpace::with_foot_map(space.robot().clone(), *space.grid(), space.foot_shared())
+    }
+
     /// The next step from `state` toward `goal`: the plan's next one if the robot stands
     /// where it starts, otherwise the first of a new plan from where it stands. `Ok(None)`
-    /// when the plan has no step left (the CG is in the goal's cell).
+    /// when the plan has no step left (the CG is in the goal's cell). A plan's joins on
+    /// workers are asked through `asker` (the planning handler's module).
     pub fn next_step(
         &self,
         state: &GaitState,
         goal: Point2<f64>,
+        asker: Module,
     ) -> Result<Option<CgNext>, String> {
         let mut queue = self.queue.lock().unwrap_or_else(|p| p.into_inner());
         let cell_m = self.cell_m();
@@ -153,7 +182,18 @@ impl CgSteps {
         let began = Instant::now();
         let grid = *space.grid();
         let executor = Executor::new(self, &grid, state);
-        let found = self.plan_from(&mut space, state, goal, &executor)?;
+        let found = match &self.joiner {
+            None => self.plan_from(&mut space, state, goal, &executor, &mut LocalRoutes)?,
+            Some(joiner) => {
+                let mut joiner = joiner.lock().unwrap_or_else(|p| p.into_inner());
+                joiner.ask_as(asker);
+                let mut routes = JoinedRoutes {
+                    joiner: &mut *joiner,
+                    batch: BatchParams::default(),
+                };
+                self.plan_from(&mut space, state, goal, &executor, &mut routes)?
+            }
+        };
         tracing::debug!(
             ms = began.elapsed().as_secs_f64() * 1e3,
             steps = found.feet.steps.len(),
@@ -189,6 +229,7 @@ impl CgSteps {
         state: &GaitState,
         goal: Point2<f64>,
         executor: &Executor<'_>,
+        routes: &mut dyn RoutePlanner,
     ) -> Result<Plan, String> {
         let t = state.body.translation;
         let yaw = state.body.rotation.euler_angles().2;
@@ -205,13 +246,14 @@ impl CgSteps {
                 .collect(),
             body_z: t.z,
         };
-        plan_checked(
+        plan_with(
             space,
             (Point2::new(t.x, t.y), yaw),
             (goal, yaw),
             Some(&standing),
             &self.params,
             Some(executor),
+            routes,
         )
         .map_err(|e| match e {
             CgError::Unreachable { .. } => format!("the goal cannot be reached: {e}"),

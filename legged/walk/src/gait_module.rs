@@ -90,6 +90,9 @@ pub enum StepPlanner {
         cg: tca_cg_space::CgParams,
         /// How it plans.
         params: tca_cg_space::PlanParams,
+        /// Worker modules that run the route's roadmap joins (`None`: the walking module
+        /// runs them itself).
+        workers: Option<crate::cg_workers::CgWorkers>,
     },
 }
 
@@ -168,16 +171,29 @@ pub async fn connect(
             terrain,
             cg,
             params,
-        } => Some(Arc::new(
-            CgSteps::new(
+            workers,
+        } => {
+            let mut steps = CgSteps::new(
                 config.model.clone(),
                 terrain.clone(),
                 cg.clone(),
                 params.clone(),
                 config.params.clone(),
             )
-            .map_err(|e| ModuleError::Config(format!("the CG-space planner: {e}")))?,
-        )),
+            .map_err(|e| ModuleError::Config(format!("the CG-space planner: {e}")))?;
+            if let Some(workers) = workers {
+                let joiner = crate::cg_workers::start(
+                    connector,
+                    &config.module_name,
+                    workers,
+                    &steps.space_template(),
+                    steps.cg_params(),
+                )
+                .await?;
+                steps = steps.with_joiner(joiner);
+            }
+            Some(Arc::new(steps))
+        }
         _ => None,
     };
     let shared = Shared {
@@ -625,7 +641,10 @@ impl Shared {
     ) -> Result<Option<(StepPlan, std::time::Duration)>, HandlerError> {
         let began = Instant::now();
         let (cg, planning_state) = (cg.clone(), state.clone());
-        let next = tokio::task::spawn_blocking(move || cg.next_step(&planning_state, goal))
+        // Joins on workers are asked as this handler's own queries (see
+        // `DistributedJoiner::ask_as`).
+        let asker = ctx.module().clone();
+        let next = tokio::task::spawn_blocking(move || cg.next_step(&planning_state, goal, asker))
             .await
             .map_err(|e| HandlerError::new(format!("the planning task ended abnormally: {e}")))?;
         let elapsed = began.elapsed();

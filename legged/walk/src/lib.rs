@@ -14,8 +14,10 @@
 //!   numbers alone.
 //! - [`terrain`]: the ground (a course or a file) and the checks on start and goal.
 //! - [`messages`]: `legged.gaitStep` and `legged.stepPlanned`.
+//! - [`cg_workers`]: worker modules for the CG-space planner's route joins.
 
 pub mod cg_steps;
+pub mod cg_workers;
 pub mod check;
 pub mod gait_module;
 pub mod map_view;
@@ -29,9 +31,10 @@ pub mod terrain;
 pub mod walk;
 mod walks;
 
+pub use cg_workers::{CgWorkerStart, CgWorkers};
 pub use check::{StateProblem, check_states};
 pub use report::{FootRecord, LeggedWalkReport, StateRecord};
 pub use system::{LEGGED_MODULES, LeggedPlanner, LeggedSetup, connect_all, connect_module};
 pub use tca_legged_controller::InjectedFault;
 pub use terrain::LeggedTerrain;
-pub use walk::{LeggedWalkOptions, walk};
+pub use walk::{LeggedWalkOptions, WalkWorkers, walk};

@@ -39,6 +39,10 @@ pub struct LeggedSetup {
     pub planner: LeggedPlanner,
     /// The simulated Controller's robot sags under load (`None`: rigid).
     pub sag: Option<tca_legged_sim::SagParams>,
+    /// With the CG-space planner: workers for its route's joins (`None`: none).
+    pub cg_workers: Option<crate::cg_workers::CgWorkers>,
+    /// With the CG-space planner: its parameters (`None`: the defaults).
+    pub cg_plan: Option<tca_cg_space::PlanParams>,
 }
 
 /// What plans a legged walk's steps.
@@ -170,12 +174,13 @@ pub async fn connect_module(
                 };
             }
             if setup.planner == LeggedPlanner::CgSpace {
-                let mut params = tca_cg_space::PlanParams::default();
+                let mut params = setup.cg_plan.clone().unwrap_or_default();
                 params.route.seed = setup.seed;
                 config.planner = crate::gait_module::StepPlanner::CgSpace {
                     terrain: setup.terrain.clone(),
                     cg: crate::cg_steps::walking_cg_params(),
                     params,
+                    workers: setup.cg_workers.clone(),
                 };
             }
             crate::gait_module::connect(connector, config).await

@@ -18,6 +18,7 @@ use tca_messages::control::TaskOutcome;
 use tca_module::{Connector, Module};
 use tokio::sync::mpsc;
 
+use crate::cg_workers::{CgWorkerStart, CgWorkers};
 use crate::check::check_states;
 use crate::messages::{RoutePlanned, StepPlanned};
 use crate::picture;
@@ -65,6 +66,25 @@ pub struct LeggedWalkOptions {
     pub attach: Option<tca_module::Attachment>,
     /// The simulated robot sags under load when a leg lifts (`None`: rigid).
     pub sag: Option<tca_legged_sim::SagParams>,
+    /// With the CG-space planner: worker modules that run its route's roadmap joins
+    /// (`None`: the walking module runs them itself). In-process walks only.
+    pub cg_workers: Option<WalkWorkers>,
+    /// With the CG-space planner: its parameters (`None`: the defaults); the route's seed is
+    /// always the walk's.
+    pub cg_plan: Option<tca_cg_space::PlanParams>,
+}
+
+/// CG-space workers for a walk.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WalkWorkers {
+    /// How many.
+    pub count: usize,
+    /// Most CG-space regions each holds (`None`: no cap).
+    pub region_cap: Option<usize>,
+    /// `Some(program)`: each worker its own process, `program module cgspace-worker ...`
+    /// (the `tca` binary), on central listening on a free loopback port; `None`: modules in
+    /// this process.
+    pub program: Option<PathBuf>,
 }
 
 impl LeggedWalkOptions {
@@ -85,6 +105,8 @@ impl LeggedWalkOptions {
             planner: LeggedPlanner::FreeGait,
             attach: None,
             sag: None,
+            cg_workers: None,
+            cg_plan: None,
         }
     }
 }
@@ -197,6 +219,8 @@ pub fn prepare(options: &LeggedWalkOptions) -> anyhow::Result<Prepared> {
         faults: options.faults.clone(),
         planner: options.planner,
         sag: options.sag,
+        cg_workers: None,
+        cg_plan: options.cg_plan.clone(),
     };
     Ok(Prepared {
         setup,
@@ -218,6 +242,43 @@ pub async fn connect_module_for(
     crate::system::connect_module(name, connector, &prepared.setup)
         .await
         .map_err(|e| anyhow::anyhow!("cannot start the legged module {name}: {e}"))
+}
+
+/// The arguments that make the `tca` binary a CG-space worker of this walk (its central,
+/// robot, terrain and seed); the layout and the index are added when each starts.
+fn worker_args(
+    options: &LeggedWalkOptions,
+    model: &RobotModel,
+    endpoint: &str,
+    region_cap: Option<usize>,
+) -> anyhow::Result<Vec<String>> {
+    let terrain = options
+        .terrain
+        .clone()
+        .unwrap_or_else(|| LeggedTerrain::default_for(model, options.seed));
+    let (terrain, seed) = match terrain {
+        LeggedTerrain::Course { name, seed } => (name, seed),
+        LeggedTerrain::File(path) => (path.display().to_string(), options.seed),
+    };
+    let mut args: Vec<String> = [
+        "module",
+        "cgspace-worker",
+        "--connect",
+        endpoint,
+        "--robot",
+        &options.robot,
+        "--terrain",
+        &terrain,
+        "--seed",
+        &seed.to_string(),
+    ]
+    .iter()
+    .map(|a| (*a).to_owned())
+    .collect();
+    if let Some(cap) = region_cap {
+        args.extend(["--region-cap".to_owned(), cap.to_string()]);
+    }
+    Ok(args)
 }
 
 /// Walks, reporting progress through `progress`. Bad robots, terrains, starts and goals are
@@ -254,10 +315,45 @@ pub async fn walk(
     }
     // Here: central (logging to DIR) and the modules in this process. Connected: the
     // walker alone, beside modules that run behind central elsewhere.
+    let mut setup = setup;
+    if let Some(w) = &options.cg_workers
+        && options.connect.is_some()
+    {
+        anyhow::bail!(
+            "CG-space workers ({} asked for) are started by an in-process walk only; without --connect, or start them beside the walking module by hand",
+            w.count
+        );
+    }
+    if options.cg_workers.is_some() && options.planner != LeggedPlanner::CgSpace {
+        anyhow::bail!("CG-space workers are for the CG-space planner; walk with --planner cgspace");
+    }
     let (central, connector, modules, log_path) = match &options.connect {
         None => {
             let log_path = options.out.as_ref().map(|d| d.join("traffic.mcap"));
-            let central = tca_central::start(StartOptions::simulated(log_path.clone()))
+            let mut start_options = StartOptions::simulated(log_path.clone());
+            if let Some(w) = &options.cg_workers {
+                setup.cg_workers = Some(match &w.program {
+                    None => CgWorkers {
+                        count: w.count,
+                        start: CgWorkerStart::InProcess {
+                            region_cap: w.region_cap,
+                        },
+                    },
+                    Some(program) => {
+                        let endpoint = tca_link::net::free_loopback_endpoint()
+                            .context("no free loopback port for the CG-space workers' central")?;
+                        start_options.listen = vec![endpoint.clone()];
+                        CgWorkers {
+                            count: w.count,
+                            start: CgWorkerStart::Processes {
+                                program: program.clone(),
+                                args: worker_args(options, &model, &endpoint, w.region_cap)?,
+                            },
+                        }
+                    }
+                });
+            }
+            let central = tca_central::start(start_options)
                 .await
                 .context("cannot start central")?;
             let connector = Connector::from(central.in_process());
