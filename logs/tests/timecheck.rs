@@ -32,7 +32,7 @@ fn envelope(class: Class, name: &str, seq: u32, at_ns: u64, data: Vec<u8>) -> En
         timestamp_ns: at_ns,
         options: SendOptions::default(),
         redelivery: 0,
-        data: data.into(),
+        data,
     }
 }
 
