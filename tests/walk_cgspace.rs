@@ -148,3 +148,69 @@ fn a_walled_in_goal_is_refused_by_tca_walk_without_a_step() {
     assert_eq!(r["collisions"], 0);
     assert!(took < Duration::from_secs(120), "took {took:?}");
 }
+
+#[test]
+fn with_workers_the_walk_asks_its_route_joins_of_worker_processes() {
+    let dir = tempfile::tempdir().expect("a temporary directory");
+    let out_dir = dir.path().to_str().expect("a UTF-8 path");
+    let out = tca(&[
+        "walk",
+        "--robot",
+        "ambler",
+        "--planner",
+        "cgspace",
+        "--course",
+        "cliff",
+        "--seed",
+        "1",
+        "--workers",
+        "2",
+        "--out",
+        out_dir,
+        "--json",
+    ]);
+    let r = report(&out);
+    let why = format!("{}", r["reason"]);
+    assert_eq!(r["reached"], true, "{why}");
+    assert_eq!(out.status.code(), Some(0), "{why}");
+    assert_eq!(
+        (r["falls"].as_u64(), r["collisions"].as_u64()),
+        (Some(0), Some(0))
+    );
+    assert_eq!(r["state_problems"].as_array().map(Vec::len), Some(0));
+    // The joins crossed the bus to both worker processes, asked by the walking module.
+    let log = tca_logs::LogFile::open(&dir.path().join("traffic.mcap")).expect("the log");
+    let mut asked = [0usize; 2];
+    for rec in &log.records {
+        let tca_logs::RecordKind::Frame(f) = &rec.kind else {
+            continue;
+        };
+        let Ok(e) = tca_logs::LogFile::envelope(f) else {
+            continue;
+        };
+        if f.direction == tca_logs::Direction::In && e.class == tca_messages::Class::Query {
+            for (k, n) in asked.iter_mut().enumerate() {
+                if e.name.as_str() == format!("cgspace.join.{k}") {
+                    assert_eq!(e.sender.as_str(), "gait");
+                    *n += 1;
+                }
+            }
+        }
+    }
+    assert!(asked.iter().all(|&n| n > 0), "joins per worker: {asked:?}");
+    let audit = tca_logs::audit(&log);
+    assert!(audit.lost.is_empty(), "{}", audit.text());
+    assert!(tca_logs::time_check(&log).holds());
+    // The workers stop with the walk.
+    std::thread::sleep(Duration::from_secs(2));
+    // (Only a walk's workers are given the planner's layout with --cg-params.)
+    let ps = Command::new("pgrep")
+        .args(["-af", "module cgspace-worker .*--cg-params"])
+        .output()
+        .expect("pgrep runs");
+    assert!(
+        ps.stdout.is_empty(),
+        "workers left running: {}",
+        text(&ps.stdout)
+    );
+}
