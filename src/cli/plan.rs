@@ -471,13 +471,8 @@ fn run_cgspace(args: CgSpaceArgs) -> anyhow::Result<ExitCode> {
                     println!("{}", cg_plan_json(seed, &space, plan, &work));
                 } else {
                     println!(
-                        "seed {seed}: route of {} cells, {:.2} m; {} foot moves, {} search nodes, {} routes planned, {} cells marked; {} CG cells evaluated in {} regions; planned in {:.3} s (CG-space built in {:.3} s)",
-                        plan.feet.route.len(),
-                        route_length_m(&grid, &plan.feet.route),
-                        foot_moves(plan),
-                        plan.feet.nodes,
-                        plan.routes,
-                        plan.marked.len(),
+                        "seed {seed}: {}; {} CG cells evaluated in {} regions; planned in {:.3} s (CG-space built in {:.3} s)",
+                        plan_summary(&grid, plan),
                         work.evaluated,
                         work.regions,
                         work.time_s,
@@ -748,13 +743,8 @@ async fn run_cgspace_workers(args: CgSpaceArgs, workers: usize) -> anyhow::Resul
                 println!("{v}");
             } else {
                 println!(
-                    "seed {seed}: route of {} cells, {:.2} m; {} foot moves, {} search nodes, {} routes planned, {} cells marked; {on_workers}; planned in {time_s:.3} s",
-                    plan.feet.route.len(),
-                    route_length_m(&grid, &plan.feet.route),
-                    foot_moves(plan),
-                    plan.feet.nodes,
-                    plan.routes,
-                    plan.marked.len(),
+                    "seed {seed}: {}; {on_workers}; planned in {time_s:.3} s",
+                    plan_summary(&grid, plan),
                 );
             }
             true
@@ -839,6 +829,19 @@ fn route_length_m(grid: &tca_cg_space::CgGrid, route: &[tca_cg_space::CgCell]) -
         .windows(2)
         .map(|w| (grid.centre(w[1].ix, w[1].iy) - grid.centre(w[0].ix, w[0].iy)).norm())
         .sum()
+}
+
+/// A plan in a line: its route, foot moves, search nodes, routes planned and cells marked.
+fn plan_summary(grid: &tca_cg_space::CgGrid, plan: &tca_cg_space::Plan) -> String {
+    format!(
+        "route of {} cells, {:.2} m; {} foot moves, {} search nodes, {} routes planned, {} cells marked",
+        plan.feet.route.len(),
+        route_length_m(grid, &plan.feet.route),
+        foot_moves(plan),
+        plan.feet.nodes,
+        plan.routes,
+        plan.marked.len(),
+    )
 }
 
 /// Foot moves of a plan: feet placed, moved or lifted (not the CG's advances).

@@ -251,7 +251,7 @@ fn worker_args(
     model: &RobotModel,
     endpoint: &str,
     region_cap: Option<usize>,
-) -> anyhow::Result<Vec<String>> {
+) -> Vec<String> {
     let terrain = options
         .terrain
         .clone()
@@ -278,7 +278,7 @@ fn worker_args(
     if let Some(cap) = region_cap {
         args.extend(["--region-cap".to_owned(), cap.to_string()]);
     }
-    Ok(args)
+    args
 }
 
 /// Walks, reporting progress through `progress`. Bad robots, terrains, starts and goals are
@@ -320,7 +320,7 @@ pub async fn walk(
         && options.connect.is_some()
     {
         anyhow::bail!(
-            "CG-space workers ({} asked for) are started by an in-process walk only; without --connect, or start them beside the walking module by hand",
+            "CG-space workers ({} asked for) are started by an in-process walk only; walk without --connect, or without workers",
             w.count
         );
     }
@@ -347,7 +347,7 @@ pub async fn walk(
                             count: w.count,
                             start: CgWorkerStart::Processes {
                                 program: program.clone(),
-                                args: worker_args(options, &model, &endpoint, w.region_cap)?,
+                                args: worker_args(options, &model, &endpoint, w.region_cap),
                             },
                         }
                     }
