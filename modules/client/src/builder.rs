@@ -123,6 +123,12 @@ impl ModuleBuilder {
 
     /// Registers the handler of message type `M` (a query, goal, command, inform or
     /// exception). For queries the handler returns the reply; for the others `()`.
+    ///
+    /// Order: the handler (the closure) is called in the order its messages arrive, one at a
+    /// time, and the future it returns then runs beside the others. Work the closure does
+    /// before it returns its future (writing a record, taking a sample into a queue) is
+    /// therefore done in arrival order; work inside the future may interleave. Keep that
+    /// synchronous part short: the module receives nothing else while it runs.
     pub fn handle<M, F, Fut>(self, handler: F) -> Self
     where
         M: Message,
@@ -138,7 +144,8 @@ impl ModuleBuilder {
     /// postcard data and returns the postcard reply (queries; ignored for the other classes).
     /// For tools that stand in for a module they were not compiled with, such as
     /// `tca log replay`, which plays a module back from a traffic log. `registration.replace`
-    /// follows [`ModuleBuilder::replace`].
+    /// follows [`ModuleBuilder::replace`]. Called in arrival order as [`ModuleBuilder::handle`]
+    /// says.
     pub fn handle_raw<F, Fut>(
         self,
         mut registration: tca_messages::control::Registration,

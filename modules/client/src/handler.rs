@@ -41,11 +41,10 @@ where
             registration.name
         )));
     }
-    let f = Arc::new(f);
-    let call: ErasedHandler = Arc::new(move |ctx: Context, data: Vec<u8>| {
-        let f = f.clone();
-        Box::pin(async move { f(ctx, data).await }) as HandlerFuture
-    });
+    // The closure is called at once (in the order messages arrive, see `run_handler`); only
+    // its future runs later.
+    let call: ErasedHandler =
+        Arc::new(move |ctx: Context, data: Vec<u8>| Box::pin(f(ctx, data)) as HandlerFuture);
     Ok(HandlerEntry { registration, call })
 }
 
@@ -64,17 +63,22 @@ where
         reply: M::reply_format()?,
         replace,
     };
-    let f = Arc::new(f);
+    // Decoded and called at once (in the order messages arrive, see `run_handler`); only the
+    // handler's future runs later.
     let call: ErasedHandler = Arc::new(move |ctx: Context, data: Vec<u8>| {
-        let f = f.clone();
-        Box::pin(async move {
-            let message: M = decode_data(&data).map_err(|e| {
-                HandlerError::new(format!(
+        let message: M = match decode_data(&data) {
+            Ok(m) => m,
+            Err(e) => {
+                let e = HandlerError::new(format!(
                     "data of {} does not decode as this module's type: {e}",
                     M::NAME
-                ))
-            })?;
-            let reply = f(ctx, message).await?;
+                ));
+                return Box::pin(std::future::ready(Err(e))) as HandlerFuture;
+            }
+        };
+        let running = f(ctx, message);
+        Box::pin(async move {
+            let reply = running.await?;
             encode_data(&reply).map_err(|e| HandlerError::new(e.to_string()))
         }) as HandlerFuture
     });

@@ -39,11 +39,6 @@ use crate::crossing::{Answer, Crossing, Payload};
 use crate::log::side_module;
 use crate::side::{Direction, Side};
 
-/// How long a carried task's failure waits before it crosses back, so that exceptions raised
-/// in the task, delivered to the bridge just before the failure, cross ahead of it. A failed
-/// task's outcome arrives this much later than its delay says; an achieved one does not wait.
-pub(crate) const EXCEPTION_GRACE: std::time::Duration = std::time::Duration::from_millis(5);
-
 type Handled = Result<Vec<u8>, HandlerError>;
 
 fn stopping() -> HandlerError {
@@ -287,17 +282,29 @@ impl Core {
     }
 }
 
+/// What a bridge handler returns: the wait for what comes back, if anything does.
+pub(crate) type Pending = std::pin::Pin<Box<dyn std::future::Future<Output = Handled> + Send>>;
+
+fn done(result: Handled) -> Pending {
+    Box::pin(std::future::ready(result))
+}
+
 /// The bridge's handler of a message crossing `direction`, on the side it leaves.
-pub(crate) async fn forward(
+///
+/// The message takes its place in the delay line here, when the handler is called: the
+/// module calls handlers in the order messages arrive, so what leaves a side crosses in the
+/// order it left (an exception raised in a carried task ahead of that task's outcome, one
+/// telemetry sample ahead of the next). The returned future only waits for what comes back.
+pub(crate) fn forward(
     core: Weak<Core>,
     direction: Direction,
     class: Class,
     name: MessageName,
     ctx: Context,
     data: Vec<u8>,
-) -> Handled {
+) -> Pending {
     let Some(c) = core.upgrade() else {
-        return Err(stopping());
+        return done(Err(stopping()));
     };
     let sender = ctx.sender().clone();
     let cause = Some(ctx.message_id());
@@ -310,7 +317,7 @@ pub(crate) async fn forward(
                 cause,
                 Payload::Inform { name, data },
             );
-            Ok(Vec::new())
+            done(Ok(Vec::new()))
         }
         Class::Exception => {
             let side = direction.from();
@@ -318,9 +325,9 @@ pub(crate) async fn forward(
                 .node()
                 .and_then(|n| lock(&c.carry_nodes).get(&(side, n)).copied());
             let Some(task) = task else {
-                return Err(HandlerError::new(format!(
+                return done(Err(HandlerError::new(format!(
                     "{name} was not raised inside a task the bridge carries out; passed up"
-                )));
+                ))));
             };
             c.cross(
                 c.next_id(),
@@ -329,7 +336,7 @@ pub(crate) async fn forward(
                 cause,
                 Payload::Exception { task, name, data },
             );
-            Ok(Vec::new())
+            done(Ok(Vec::new()))
         }
         Class::Query => {
             let id = c.next_id();
@@ -352,38 +359,40 @@ pub(crate) async fn forward(
                 },
             );
             drop(c);
-            match tokio::time::timeout(within, rx).await {
-                Ok(Ok(Answer::Reply(reply))) => Ok(reply),
-                Ok(Ok(Answer::Failed(reason))) => Err(HandlerError::new(reason)),
-                Ok(Ok(Answer::Done)) => Err(HandlerError::new(format!(
-                    "{name}: a task's outcome came back for a query"
-                ))),
-                Ok(Err(_)) => Err(stopping()),
-                Err(_) => {
-                    if let Some(c) = core.upgrade() {
-                        lock(&c.waiting).remove(&id);
+            Box::pin(async move {
+                match tokio::time::timeout(within, rx).await {
+                    Ok(Ok(Answer::Reply(reply))) => Ok(reply),
+                    Ok(Ok(Answer::Failed(reason))) => Err(HandlerError::new(reason)),
+                    Ok(Ok(Answer::Done)) => Err(HandlerError::new(format!(
+                        "{name}: a task's outcome came back for a query"
+                    ))),
+                    Ok(Err(_)) => Err(stopping()),
+                    Err(_) => {
+                        if let Some(c) = core.upgrade() {
+                            lock(&c.waiting).remove(&id);
+                        }
+                        Err(HandlerError::new(format!(
+                            "no answer to {name} came back across the bridge within {:.3} s \
+                             (its own {:.3} s on the {} side, {:.3} s there and {:.3} s back, \
+                             and a second for the centrals)",
+                            within.as_secs_f64(),
+                            timeout.as_secs_f64(),
+                            direction.to(),
+                            up.as_secs_f64(),
+                            down.as_secs_f64()
+                        )))
                     }
-                    Err(HandlerError::new(format!(
-                        "no answer to {name} came back across the bridge within {:.3} s (its \
-                         own {:.3} s on the {} side, {:.3} s there and {:.3} s back, and a \
-                         second for the centrals)",
-                        within.as_secs_f64(),
-                        timeout.as_secs_f64(),
-                        direction.to(),
-                        up.as_secs_f64(),
-                        down.as_secs_f64()
-                    )))
                 }
-            }
+            })
         }
         Class::Goal | Class::Command => {
             if ctx.redelivery() > 0 {
-                return Err(HandlerError::new(format!(
+                return done(Err(HandlerError::new(format!(
                     "{name} was crossing to the {} side when the bridge stopped; whether it \
                      was carried out there is not known, so it is not sent again: look at the \
                      telemetry, then send it again if it is still wanted",
                     direction.to()
-                )));
+                ))));
             }
             let id = c.next_id();
             let rx = c.wait_answer(id, &ctx);
@@ -406,21 +415,23 @@ pub(crate) async fn forward(
                 },
             );
             drop(c);
-            let answer = rx.await;
-            guard.disarm();
-            match answer {
-                Ok(Answer::Done) => Ok(Vec::new()),
-                Ok(Answer::Failed(reason)) => Err(HandlerError::new(reason)),
-                Ok(Answer::Reply(_)) => Err(HandlerError::new(format!(
-                    "{name}: a reply came back for a {class}"
-                ))),
-                Err(_) => Err(stopping()),
-            }
+            Box::pin(async move {
+                let answer = rx.await;
+                guard.disarm();
+                match answer {
+                    Ok(Answer::Done) => Ok(Vec::new()),
+                    Ok(Answer::Failed(reason)) => Err(HandlerError::new(reason)),
+                    Ok(Answer::Reply(_)) => Err(HandlerError::new(format!(
+                        "{name}: a reply came back for a {class}"
+                    ))),
+                    Err(_) => Err(stopping()),
+                }
+            })
         }
-        other => Err(HandlerError::new(format!(
+        other => done(Err(HandlerError::new(format!(
             "{name} is a {other}: the bridge forwards queries, goals, commands, informs and \
              exceptions"
-        ))),
+        )))),
     }
 }
 
@@ -527,14 +538,10 @@ pub(crate) async fn carry(core: Weak<Core>, side: Side, ctx: Context, data: Vec<
     }
     c.released(&crossing, Some(child.id()));
     drop(c);
+    // Central sends an exception raised in the node before the node's failure, and the
+    // bridge's exception handler puts it in the delay line as it arrives (see `forward`),
+    // before this wait can wake: the exception crosses ahead of the outcome.
     let outcome = child.outcome().await;
-    if !matches!(outcome, Ok(TaskOutcome::Achieved)) {
-        // Central sends an exception raised in the node before the node's failure, but the
-        // bridge handles the exception in a task of its own, which may not have run yet:
-        // the failure waits EXCEPTION_GRACE so that the exception crosses first (its handler
-        // finds the carry until the outcome has crossed, see `Core::answer`).
-        tokio::time::sleep(EXCEPTION_GRACE).await;
-    }
     match outcome {
         Ok(TaskOutcome::Achieved) => Ok(Vec::new()),
         Ok(TaskOutcome::Failed(reason)) => Err(HandlerError::new(reason)),

@@ -171,13 +171,15 @@ impl Module {
                 class,
             },
         );
-        let call = entry.call.clone();
-        let data = envelope.data.clone();
+        // The handler is called here, in the order messages arrive: what it does before its
+        // future first waits (a monitor writing a record, a bridge taking a crossing into its
+        // delay line) happens in that order. Its future then runs beside the others.
+        let running_handler = (entry.call)(ctx, envelope.data.clone());
         // Hold the table while spawning so the handler cannot finish (and remove itself)
         // before it is entered.
         let mut running = lock(&self.shared.running);
         let task = tokio::spawn(async move {
-            let result = call(ctx, data).await;
+            let result = running_handler.await;
             if let Some(n) = node {
                 lock(&handler_module.shared.running).remove(&n);
             }
