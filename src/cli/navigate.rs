@@ -47,6 +47,15 @@ pub(crate) struct NavigateArgs {
     /// Run this many seeds (seed, seed + 1, ...) and print a summary too.
     #[arg(long, default_value_t = 1)]
     seeds: u64,
+    /// Weight of danger against length in D* Lite's edge cost, per cell (the robot's
+    /// default is 2; the paper asks for more than 1). Lower follows the shortest way more
+    /// closely, higher keeps further from dangerous and unknown ground.
+    #[arg(long, value_name = "BETA", conflicts_with = "connect")]
+    beta: Option<f64>,
+    /// How far along the planned path the follower steers to, m (default 0.12). Longer
+    /// cuts the grid path's corners more, and passes closer to what the path goes round.
+    #[arg(long, value_name = "M", conflicts_with = "connect")]
+    lookahead: Option<f64>,
     /// Danger parameters file (TOML) instead of the robot's own.
     #[arg(long)]
     danger: Option<PathBuf>,
@@ -194,7 +203,23 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
         bail!("--seeds must be at least 1");
     }
     let course = course(&args)?;
-    let (base, params) = nav_robot(&args.robot, args.danger.as_deref(), args.matcher)?;
+    let (base, mut params) = nav_robot(&args.robot, args.danger.as_deref(), args.matcher)?;
+    if let Some(beta) = args.beta {
+        if !(beta.is_finite() && beta >= 0.0) {
+            bail!(
+                "--beta {beta} is not valid; give a weight of at least 0 (more than 1 as the paper asks; the default is 2)"
+            );
+        }
+        params.beta = beta;
+    }
+    if let Some(lookahead) = args.lookahead {
+        if !(lookahead.is_finite() && lookahead > 0.0) {
+            bail!(
+                "--lookahead {lookahead} is not valid; give a distance in metres above 0 (the default is 0.12)"
+            );
+        }
+        params.lookahead_m = lookahead;
+    }
     let terrain = std::sync::Arc::new(course.terrain.clone());
     let attach = args
         .foxglove
