@@ -1,4 +1,4 @@
-//! `tca navigate`'s planning and following options: `--beta` and `--lookahead` change the
+//! `tca navigate`'s planning and following options: `--beta`, `--lookahead` and `--sight` change the
 //! run (and the true-map path it is judged against), and values that cannot work are refused
 //! saying what to give.
 
@@ -12,7 +12,7 @@ fn report(stdout: &str, stderr: &str) -> serde_json::Value {
 }
 
 #[test]
-fn beta_and_lookahead_change_the_run_and_bad_values_are_refused() {
+fn beta_lookahead_and_sight_change_the_run_and_bad_values_are_refused() {
     let run = |extra: &[&str]| {
         let mut args = vec![
             "navigate",
@@ -35,7 +35,9 @@ fn beta_and_lookahead_change_the_run_and_bad_values_are_refused() {
     let default = run(&[]);
     let heavy = run(&["--beta", "8"]);
     let long = run(&["--lookahead", "0.4"]);
-    for r in [&default, &heavy, &long] {
+    let sight = run(&["--sight", "0.6"]);
+    for r in [&default, &heavy, &long, &sight] {
+        assert_eq!(r["untraversable_frames"], 0, "{r}");
         assert_eq!(r["reached"], true, "{r}");
     }
     assert_ne!(
@@ -54,6 +56,7 @@ fn beta_and_lookahead_change_the_run_and_bad_values_are_refused() {
         (vec!["--beta=-1"], "--beta -1 is not valid"),
         (vec!["--beta", "NaN"], "--beta NaN is not valid"),
         (vec!["--lookahead", "0"], "--lookahead 0 is not valid"),
+        (vec!["--sight=-0.5"], "--sight -0.5 is not valid"),
     ] {
         let mut all = vec!["navigate", "--terrain", "hill", "--direct"];
         all.extend_from_slice(&args);

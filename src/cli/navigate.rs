@@ -56,6 +56,10 @@ pub(crate) struct NavigateArgs {
     /// cuts the grid path's corners more, and passes closer to what the path goes round.
     #[arg(long, value_name = "M", conflicts_with = "connect")]
     lookahead: Option<f64>,
+    /// Line of sight, m: steer to the farthest path cell within this distance that a
+    /// straight line reaches over ground no worse than the path's own (default 0: off).
+    #[arg(long, value_name = "M", conflicts_with = "connect")]
+    sight: Option<f64>,
     /// Danger parameters file (TOML) instead of the robot's own.
     #[arg(long)]
     danger: Option<PathBuf>,
@@ -219,6 +223,12 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
             );
         }
         params.lookahead_m = lookahead;
+    }
+    if let Some(sight) = args.sight {
+        if !(sight.is_finite() && sight >= 0.0) {
+            bail!("--sight {sight} is not valid; give a distance in metres of at least 0 (0: off)");
+        }
+        params.sight_m = sight;
     }
     let terrain = std::sync::Arc::new(course.terrain.clone());
     let attach = args

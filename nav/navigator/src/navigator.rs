@@ -88,6 +88,11 @@ pub struct NavParams {
     pub turn_gain: f64,
     /// Distance ahead on the path the follower steers to, m.
     pub lookahead_m: f64,
+    /// Line of sight along the path, m (0: off). When above 0 the follower steers to the
+    /// farthest path cell within this distance that a straight line reaches over cells no
+    /// more dangerous than the path's own up to there (and no nearer an untraversable cell
+    /// than the path comes), so the grid path's corners are cut where the ground allows it.
+    pub sight_m: f64,
     /// Time between frames, s: each command holds for one frame.
     pub frame_period_s: f64,
     /// The LTM Matcher: register each frame against the map so far and correct the pose
@@ -113,6 +118,7 @@ impl NavParams {
             max_turn_rps: 0.6,
             turn_gain: 1.5,
             lookahead_m: 0.12,
+            sight_m: 0.0,
             frame_period_s: 0.25,
             matcher: None,
         }
@@ -448,6 +454,11 @@ impl Navigator {
                 break;
             }
         }
+        if let Some(seen) = self.farthest_in_sight(here)
+            && (seen - here).norm() > (target - here).norm()
+        {
+            target = seen;
+        }
         if dist_goal < self.params.lookahead_m {
             target = self.goal;
         }
@@ -463,6 +474,58 @@ impl Navigator {
             forward_mps: forward.min(dist_goal / self.params.frame_period_s),
             turn_rps: turn,
         }
+    }
+}
+
+impl Navigator {
+    /// The farthest path cell within `sight_m` that a straight line from `here` reaches
+    /// over ground no worse than the path's own up to that cell.
+    fn farthest_in_sight(&self, here: Point2<f64>) -> Option<Point2<f64>> {
+        let sight = self.params.sight_m;
+        if sight <= 0.0 {
+            return None;
+        }
+        let nx = self.cells.nx();
+        let near = |c: CellIndex| self.near_untraversable[c.iy * nx + c.ix] > 0;
+        let mut worst = 0.0f64;
+        let mut path_near = false;
+        let mut best = None;
+        for c in self.path.iter().skip(1) {
+            let ci = CellIndex::new(c.ix, c.iy);
+            worst = worst.max(self.planned_danger(ci));
+            path_near |= near(ci);
+            let p = self.cell_point(*c);
+            let d = (p - here).norm();
+            if d > sight {
+                break;
+            }
+            if self.line_clear(here, p, worst, path_near, &near) {
+                best = Some(p);
+            }
+        }
+        best
+    }
+
+    /// Whether every cell on the segment `a`-`b` is finite, no more dangerous than
+    /// `worst`, and (unless `near_allowed`) clear of untraversable cells.
+    fn line_clear(
+        &self,
+        a: Point2<f64>,
+        b: Point2<f64>,
+        worst: f64,
+        near_allowed: bool,
+        near: &dyn Fn(CellIndex) -> bool,
+    ) -> bool {
+        let step = self.cells.resolution_m() * 0.5;
+        let n = ((b - a).norm() / step).ceil().max(1.0) as usize;
+        (0..=n).all(|i| {
+            let p = a + (b - a) * (i as f64 / n as f64);
+            let Some(c) = self.cells.cell_at(p) else {
+                return false;
+            };
+            let d = self.planned_danger(c);
+            d.is_finite() && d <= worst + 1e-9 && (near_allowed || !near(c))
+        })
     }
 }
 
