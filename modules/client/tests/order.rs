@@ -35,6 +35,13 @@ fn assert_in_order(seen: &[u32]) {
     }
 }
 
+/// A module that only sends.
+async fn connect_sender(connector: &tca_module::Connector) -> Module {
+    within("sender", Module::builder("sender").connect(connector))
+        .await
+        .unwrap()
+}
+
 async fn wait_for(seen: &Mutex<Vec<u32>>, count: usize) {
     within("every sample handled", async {
         while seen.lock().unwrap().len() < count {
@@ -66,9 +73,7 @@ async fn typed_handlers_are_called_in_arrival_order() {
     )
     .await
     .unwrap();
-    let sender = within("sender", Module::builder("sender").connect(&connector))
-        .await
-        .unwrap();
+    let sender = connect_sender(&connector).await;
     for n in 0..SAMPLES {
         sender.inform(&Sample(n)).unwrap();
     }
@@ -108,9 +113,7 @@ async fn raw_handlers_are_called_in_arrival_order() {
     )
     .await
     .unwrap();
-    let sender = within("sender", Module::builder("sender").connect(&connector))
-        .await
-        .unwrap();
+    let sender = connect_sender(&connector).await;
     for n in 0..SAMPLES {
         sender
             .send_raw(Class::Inform, "rawSample", encode_data(&n).unwrap(), [])
