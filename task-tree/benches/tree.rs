@@ -13,7 +13,7 @@
 //!
 //! Run: `CARGO_TARGET_DIR=/work/target-task-tree cargo bench -p tca-task-tree --bench tree`.
 
-#[path = "../tests/common/walking.rs"]
+#[path = "../tests/integration/common/walking.rs"]
 mod walking;
 
 use std::collections::VecDeque;

@@ -24,7 +24,7 @@ fn main() -> AnyResult<()> {
     let gait = GaitPlanner::new(LegParams::default(), GaitParams::default())?;
     let lrp = LegRecoveryPlanner::new(LegParams::default(), LrpParams::default())?;
     let kin = LegKinematics::new(&LegParams::default());
-    // The first five steps of the course-3 walk in `tests/walk.rs`: carriage Y, planted foot.
+    // The first five steps of the course-3 walk in `tests/system/walk.rs`: carriage Y, planted foot.
     let steps = [
         (1.0, (3.8, 0.6)),
         (2.49, (1.55, 1.75)),

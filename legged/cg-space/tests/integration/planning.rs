@@ -1,0 +1,231 @@
+//! Planning on built terrains: validity, routes, footfalls and the feedback.
+
+use crate::common;
+
+use std::time::{Duration, Instant};
+
+use nalgebra::Point2;
+use tca_cg_space::{CgError, CgParams, CgSpace, FootStep, PlanParams, Verdict, plan};
+use tca_legged_model::RobotModel;
+
+fn ambler_space(terrain: &tca_robot::HeightField) -> CgSpace {
+    let model = RobotModel::builtin("ambler").expect("the Ambler");
+    CgSpace::for_model(&model, terrain, CgParams::default()).expect("a CG-space")
+}
+
+#[test]
+fn flat_ground_is_valid_and_a_plan_keeps_every_stance_standing() {
+    let t = common::terrain(0.0, 20.0, -6.0, 6.0, 0.1, |_, _| 0.0);
+    let mut space = ambler_space(&t);
+    let p = plan(
+        &mut space,
+        (Point2::new(5.0, 0.0), 0.0),
+        (Point2::new(10.0, 0.0), 0.0),
+        None,
+        &PlanParams::default(),
+    )
+    .expect("a plan on flat ground");
+    let route = &p.feet.route;
+    let grid = *space.grid();
+    assert!(
+        route
+            .windows(2)
+            .all(|w| grid.steps_between(w[0], w[1]) == 1)
+    );
+    let advances = p
+        .feet
+        .steps
+        .iter()
+        .filter(|s| matches!(s, FootStep::Advance { .. }))
+        .count();
+    assert_eq!(advances, route.len() - 1);
+    assert!(
+        p.feet
+            .steps
+            .iter()
+            .any(|s| matches!(s, FootStep::Place { .. })),
+        "the feet must move to go 5 m"
+    );
+    // Check each stance independently: at least three feet down, the CG inside them, each
+    // foot within its leg's range (the body-frame map) at a common body height.
+    let robot = space.robot().clone();
+    for s in p.feet.stances() {
+        let c = route[s.k];
+        let centre = grid.centre(c.ix, c.iy);
+        let theta = grid.theta(c.it);
+        let down: Vec<Point2<f64>> = s
+            .feet
+            .iter()
+            .flatten()
+            .map(|f| grid.centre(f.0, f.1))
+            .collect();
+        assert!(down.len() >= 3);
+        let poly = tca_stability::support_polygon(&down);
+        assert!(
+            poly.signed_distance(centre + robot.com.coords) > 0.0,
+            "CG outside the feet at {c:?}"
+        );
+        let (s_, c_) = theta.sin_cos();
+        let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+        for (leg, f) in s.feet.iter().enumerate() {
+            let Some(f) = f else { continue };
+            let d = grid.centre(f.0, f.1) - centre;
+            let body = Point2::new(c_ * d.x + s_ * d.y, -s_ * d.x + c_ * d.y);
+            let (z_lo, z_hi) = robot
+                .reach_at(leg, body)
+                .expect("foot within its leg's range");
+            let r = robot.foot_radius[leg];
+            lo = lo.max(r - z_hi);
+            hi = hi.min(r - z_lo);
+        }
+        assert!(lo <= hi, "no body height suits every foot at {c:?}");
+    }
+}
+
+#[test]
+fn straddled_patch_leaves_cg_cells_valid_and_a_large_region_grows_a_border() {
+    // A 3 m patch of spikes too steep to stand on at (10, 0), and a 12 x 12 m steep field
+    // about (26, 0).
+    let t = common::terrain(0.0, 40.0, -12.0, 12.0, 0.1, |x, y| {
+        let small = (x - 10.0).abs() < 1.5 && y.abs() < 1.5;
+        let big = (x - 26.0).abs() < 6.0 && y.abs() < 6.0;
+        if small || big {
+            if ((x * 10.0).round() as i64 + (y * 10.0).round() as i64) % 2 == 0 {
+                0.4
+            } else {
+                0.0
+            }
+        } else {
+            0.0
+        }
+    });
+    let mut space = ambler_space(&t);
+    let grid = *space.grid();
+    let foot = space.foot().clone();
+    let (px, py) = grid.xy_of(Point2::new(10.0, 0.0));
+    assert!(!foot.valid(px, py), "the patch is no foothold");
+    // The Ambler straddles the small patch: every heading valid over it.
+    for it in 0..grid.theta_bins {
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                let c = tca_cg_space::CgCell::new(px + dx, py + dy, it);
+                assert!(
+                    space.is_valid(c),
+                    "{c:?} over the small patch: {:?}",
+                    space.verdict(c)
+                );
+            }
+        }
+    }
+    // Over the middle of the big field no stance exists...
+    let (bx, by) = grid.xy_of(Point2::new(26.0, 0.0));
+    assert!(!space.is_valid(tca_cg_space::CgCell::new(bx, by, 0)));
+    // ...and going west from it, the first valid CG cell lies beyond the last invalid foot
+    // cell: a border of invalid CG cells over good footing, where one side has no support.
+    let mut last_bad_foot = bx;
+    while !foot.valid(last_bad_foot - 1, by) {
+        last_bad_foot -= 1;
+    }
+    let mut first_valid = bx;
+    while !space.is_valid(tca_cg_space::CgCell::new(first_valid, by, 0)) {
+        first_valid -= 1;
+    }
+    assert!(
+        first_valid < last_bad_foot - 1,
+        "valid CG cell at column {first_valid}, field ends at {last_bad_foot}"
+    );
+    // Far from everything, valid.
+    let (fx, fy) = grid.xy_of(Point2::new(4.0, 0.0));
+    assert!(space.is_valid(tca_cg_space::CgCell::new(fx, fy, 0)));
+
+    // The spider, whose feet reach at most 1.3 m from its centre, cannot straddle the
+    // same patch: over its middle it has invalid CG cells; well away from it, none.
+    let spider = RobotModel::builtin("spider").expect("the spider");
+    let mut space = CgSpace::for_model(&spider, &t, CgParams::default()).expect("a CG-space");
+    let grid = *space.grid();
+    assert_eq!(
+        grid.theta_bins, 1,
+        "the spider is the same turned by an eighth"
+    );
+    let (px, py) = grid.xy_of(Point2::new(10.0, 0.0));
+    let over_patch = (-3..=3)
+        .flat_map(|dx| (-3..=3).map(move |dy| (dx, dy)))
+        .filter(|&(dx, dy)| !space.is_valid(tca_cg_space::CgCell::new(px + dx, py + dy, 0)))
+        .count();
+    assert!(
+        over_patch > 0,
+        "the spider stands everywhere over the patch"
+    );
+    let (fx, fy) = grid.xy_of(Point2::new(4.0, 0.0));
+    assert!(space.is_valid(tca_cg_space::CgCell::new(fx, fy, 0)));
+}
+
+#[test]
+fn cliff_is_invalid_and_the_route_takes_the_ramp() {
+    // The walking course's cliff: its ramp is wide enough for the Ambler to stand on with
+    // every leg clear of the others (the search checks the legs' links against each other).
+    let t = tca_legged_courses::Course::builtin("cliff", 1)
+        .expect("the cliff course")
+        .terrain;
+    let mut space = ambler_space(&t);
+    let grid = *space.grid();
+    // Standing across the cliff face is impossible: feet at the base and on top.
+    let (cx, cy) = grid.xy_of(Point2::new(14.0, 0.0));
+    let v = space.verdict(tca_cg_space::CgCell::new(cx, cy, 0));
+    assert!(
+        matches!(v, Verdict::NoHeight | Verdict::EmptyQuadrant(_)),
+        "{v:?}"
+    );
+    let p = plan(
+        &mut space,
+        (Point2::new(4.0, 0.0), 0.0),
+        (Point2::new(24.0, 0.0), 0.0),
+        None,
+        &PlanParams::default(),
+    )
+    .expect("a plan by the ramp");
+    let route = &p.feet.route;
+    // Where the route crosses x = 14 m, it is on the ramp's side.
+    for c in route {
+        let at = grid.centre(c.ix, c.iy);
+        if (at.x - 14.0).abs() < 1.0 {
+            assert!(at.y > 2.0, "the route crosses the cliff at {at:?}");
+        }
+    }
+    let foot = space.foot();
+    for s in p.feet.stances() {
+        for f in s.feet.iter().flatten() {
+            assert!(foot.valid(f.0, f.1), "a foot on the cliff face at {f:?}");
+        }
+    }
+}
+
+#[test]
+fn walled_goal_is_reported_unreachable_quickly() {
+    // The goal in a yard walled in by a ring 1 m thick and 5 m tall: taller than the legs
+    // span and than the under-carriage clears.
+    let t = common::terrain(0.0, 30.0, -10.0, 10.0, 0.1, |x, y| {
+        let d = (x - 20.0).abs().max(y.abs());
+        if (5.0..6.0).contains(&d) { 5.0 } else { 0.0 }
+    });
+    let mut space = ambler_space(&t);
+    let began = Instant::now();
+    let r = plan(
+        &mut space,
+        (Point2::new(5.0, 0.0), 0.0),
+        (Point2::new(20.0, 0.0), 0.0),
+        None,
+        &PlanParams::default(),
+    );
+    assert!(
+        matches!(
+            r,
+            Err(CgError::Unreachable {
+                enclosed: "goal",
+                ..
+            })
+        ),
+        "{r:?}"
+    );
+    assert!(began.elapsed() < Duration::from_secs(60));
+}

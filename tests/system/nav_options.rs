@@ -1,0 +1,78 @@
+//! `tca navigate`'s planning and following options: `--beta`, `--lookahead` and `--sight` change the
+//! run (and the true-map path it is judged against), and values that cannot work are refused
+//! saying what to give.
+
+use crate::common::*;
+
+fn report(stdout: &str, stderr: &str) -> serde_json::Value {
+    let line = stdout.lines().last().unwrap_or_default();
+    serde_json::from_str(line).unwrap_or_else(|e| panic!("{e}: {stdout}\n{stderr}"))
+}
+
+#[test]
+fn beta_lookahead_and_sight_change_the_run_and_bad_values_are_refused() {
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "navigate",
+            "--terrain",
+            "hill",
+            "--seed",
+            "1",
+            "--direct",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let out = tca_output(&args);
+        let (stdout, stderr) = (
+            String::from_utf8_lossy(&out.stdout).to_string(),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+        );
+        assert!(out.status.success(), "{stderr}");
+        report(&stdout, &stderr)
+    };
+    let default = run(&[]);
+    let heavy = run(&["--beta", "8"]);
+    let long = run(&["--lookahead", "0.4"]);
+    let sight = run(&["--sight", "0.6"]);
+    for r in [&default, &heavy, &long, &sight] {
+        assert_eq!(r["untraversable_frames"], 0, "{r}");
+        assert_eq!(r["reached"], true, "{r}");
+    }
+    assert_ne!(
+        default["path"], heavy["path"],
+        "--beta 8 drove the same path"
+    );
+    assert_ne!(
+        default["path"], long["path"],
+        "--lookahead 0.4 drove the same path"
+    );
+    assert_ne!(
+        default["true_map_path_m"], heavy["true_map_path_m"],
+        "the true-map path is planned with the same beta"
+    );
+    for (args, says) in [
+        (vec!["--beta=-1"], "--beta -1 is not valid"),
+        (vec!["--beta", "NaN"], "--beta NaN is not valid"),
+        (vec!["--lookahead", "0"], "--lookahead 0 is not valid"),
+        (vec!["--sight=-0.5"], "--sight -0.5 is not valid"),
+    ] {
+        let mut all = vec!["navigate", "--terrain", "hill", "--direct"];
+        all.extend_from_slice(&args);
+        let out = tca_output(&all);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(says), "{err}");
+    }
+    let out = tca_output(&[
+        "navigate",
+        "--terrain",
+        "hill",
+        "--beta",
+        "3",
+        "--connect",
+        "tcp/127.0.0.1:1",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--beta") && err.contains("--connect"), "{err}");
+}
