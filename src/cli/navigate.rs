@@ -60,6 +60,10 @@ pub(crate) struct NavigateArgs {
     /// straight line reaches over ground no worse than the path's own (default 0: off).
     #[arg(long, value_name = "M", conflicts_with = "connect")]
     sight: Option<f64>,
+    /// Clearance kept from untraversable cells when planning, m (default 0.06): a cell this
+    /// close to one is planned as barely traversable, a margin for drift and tracking error.
+    #[arg(long, value_name = "M", conflicts_with = "connect")]
+    clearance: Option<f64>,
     /// Danger parameters file (TOML) instead of the robot's own.
     #[arg(long)]
     danger: Option<PathBuf>,
@@ -229,6 +233,14 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
             bail!("--sight {sight} is not valid; give a distance in metres of at least 0 (0: off)");
         }
         params.sight_m = sight;
+    }
+    if let Some(clearance) = args.clearance {
+        if !(clearance.is_finite() && clearance >= 0.0) {
+            bail!(
+                "--clearance {clearance} is not valid; give a distance in metres of at least 0 (the default is 0.06)"
+            );
+        }
+        params.clearance_m = clearance;
     }
     let terrain = std::sync::Arc::new(course.terrain.clone());
     let attach = args
