@@ -8,7 +8,7 @@
 //! Run: `cargo bench --bench bus` (figures in BENCHMARKS.md).
 
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+
 use std::time::Duration;
 
 use bytes::Bytes;
@@ -17,15 +17,16 @@ use tca_central::{Action, Central, CentralConfig, Event, StartOptions};
 use tca_messages::control::{Hello, Register, names};
 use tca_messages::*;
 use tca_module::{Connector, Module};
-use tca_ping::echo::{self, Ping, PingGoal};
+use tca_ping::echo::{self, Ping};
 
 #[path = "common/goal_flood.rs"]
 mod goal_flood;
+use goal_flood::GoalCount;
 #[path = "common/on_worker.rs"]
 mod on_worker;
 use on_worker::time_on_worker;
 use tokio::runtime::Runtime;
-use tokio::sync::{Notify, mpsc};
+use tokio::sync::mpsc;
 
 /// The allocator the `tca` command uses, so that what is measured here is what it runs.
 #[global_allocator]
@@ -185,12 +186,7 @@ fn routed_query(c: &mut Criterion, rt: &Runtime, zenoh: bool) {
 
 /// Goals through central, in-process or over zenoh, central keeping a journal or not.
 fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool, journal: bool) {
-    // A sink module counting goals, and a sender.
-    // The sink wakes the timing loop once, when the count reaches the sample's target (a wake
-    // per goal would time tokio's Notify as much as central).
-    let count = Arc::new(AtomicU64::new(0));
-    let target = Arc::new(AtomicU64::new(u64::MAX));
-    let notify = Arc::new(Notify::new());
+    let goals = GoalCount::new();
     let (central, sender, _sink, _dir) = rt.block_on(async {
         let dir = tempfile::tempdir().unwrap();
         let endpoint = free_endpoint();
@@ -211,18 +207,7 @@ fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool, journal: bool) 
         } else {
             Connector::from(central.in_process())
         };
-        let (count, target, notify) = (count.clone(), target.clone(), notify.clone());
-        let sink = Module::builder("sink")
-            .capacity(4096)
-            .handle(move |_ctx, _g: PingGoal| {
-                if count.fetch_add(1, Ordering::Relaxed) + 1 >= target.load(Ordering::Relaxed) {
-                    notify.notify_one();
-                }
-                async { Ok(()) }
-            })
-            .connect(&connector)
-            .await
-            .unwrap();
+        let sink = goals.sink("sink").connect(&connector).await.unwrap();
         let sender = Module::builder("sender").connect(&connector).await.unwrap();
         (central, sender, sink, dir)
     });
@@ -232,7 +217,7 @@ fn goal_throughput(c: &mut Criterion, rt: &Runtime, zenoh: bool, journal: bool) 
         (false, false) => "central/inproc_goal_throughput",
         (false, true) => "central/inproc_goal_throughput_journaled",
     };
-    goal_flood::measure(c, rt, name, &sender, &count, &target, &notify);
+    goal_flood::measure(c, rt, name, &sender, &goals);
     rt.block_on(async { central.shutdown().await.unwrap() });
 }
 

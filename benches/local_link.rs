@@ -15,22 +15,23 @@
 use std::io::{Read, Write};
 use std::process::{Child, Command, Stdio};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+
 use std::time::Duration;
 
 use bytes::Bytes;
 use criterion::{Criterion, criterion_group, criterion_main};
 use tca_central::StartOptions;
 use tca_module::{Connector, Module};
-use tca_ping::echo::{self, Ping, PingGoal};
+use tca_ping::echo::{self, Ping};
 
 #[path = "common/goal_flood.rs"]
 mod goal_flood;
+use goal_flood::GoalCount;
 #[path = "common/on_worker.rs"]
 mod on_worker;
 use on_worker::{samples_on_worker, time_on_worker};
 use tokio::runtime::Runtime;
-use tokio::sync::{Notify, mpsc};
+use tokio::sync::mpsc;
 
 /// The allocator the `tca` command uses, so that what is measured here is what it runs.
 #[global_allocator]
@@ -252,29 +253,19 @@ fn cross_process_query(c: &mut Criterion, rt: &Runtime, name: &str, echo_at: &st
 
 /// Goals from a sender to a sink, each on its own link to central at `connector`.
 fn goal_throughput(c: &mut Criterion, rt: &Runtime, name: &str, connector: Connector) {
-    // The sink wakes the timing loop once, when the count reaches the sample's target.
-    let count = Arc::new(AtomicU64::new(0));
-    let target = Arc::new(AtomicU64::new(u64::MAX));
-    let notify = Arc::new(Notify::new());
+    let goals = GoalCount::new();
     let sink_name = format!("sink-{}", name.replace('/', "-"));
     let (sender, sink) = rt.block_on(async {
-        let (count, target, notify) = (count.clone(), target.clone(), notify.clone());
-        let sink = Module::builder(sink_name)
-            .capacity(4096)
+        let sink = goals
+            .sink(sink_name)
             .replace(true)
-            .handle(move |_ctx, _g: PingGoal| {
-                if count.fetch_add(1, Ordering::Relaxed) + 1 >= target.load(Ordering::Relaxed) {
-                    notify.notify_one();
-                }
-                async { Ok(()) }
-            })
             .connect(&connector)
             .await
             .unwrap();
         let sender = connect_retrying(&connector, "sender").await;
         (sender, sink)
     });
-    goal_flood::measure(c, rt, name, &sender, &count, &target, &notify);
+    goal_flood::measure(c, rt, name, &sender, &goals);
     rt.block_on(async {
         sender.close().await;
         sink.close().await;
