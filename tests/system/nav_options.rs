@@ -1,6 +1,6 @@
-//! `tca navigate`'s planning and following options: `--beta`, `--lookahead` and `--sight` change the
-//! run (and the true-map path it is judged against), and values that cannot work are refused
-//! saying what to give.
+//! `tca navigate`'s planning and following options: `--beta`, `--lookahead`, `--sight` and
+//! `--clearance` change the run (and the true-map path it is judged against), and values that
+//! cannot work are refused saying what to give.
 
 use crate::common::*;
 
@@ -10,7 +10,7 @@ fn report(stdout: &str, stderr: &str) -> serde_json::Value {
 }
 
 #[test]
-fn beta_lookahead_and_sight_change_the_run_and_bad_values_are_refused() {
+fn beta_lookahead_sight_and_clearance_change_the_run_and_bad_values_are_refused() {
     let run = |extra: &[&str]| {
         let mut args = vec![
             "navigate",
@@ -34,7 +34,8 @@ fn beta_lookahead_and_sight_change_the_run_and_bad_values_are_refused() {
     let heavy = run(&["--beta", "8"]);
     let long = run(&["--lookahead", "0.4"]);
     let sight = run(&["--sight", "0.6"]);
-    for r in [&default, &heavy, &long, &sight] {
+    let wide = run(&["--clearance", "0.15"]);
+    for r in [&default, &heavy, &long, &sight, &wide] {
         assert_eq!(r["untraversable_frames"], 0, "{r}");
         assert_eq!(r["reached"], true, "{r}");
     }
@@ -47,6 +48,10 @@ fn beta_lookahead_and_sight_change_the_run_and_bad_values_are_refused() {
         "--lookahead 0.4 drove the same path"
     );
     assert_ne!(
+        default["path"], wide["path"],
+        "--clearance 0.15 drove the same path"
+    );
+    assert_ne!(
         default["true_map_path_m"], heavy["true_map_path_m"],
         "the true-map path is planned with the same beta"
     );
@@ -55,6 +60,7 @@ fn beta_lookahead_and_sight_change_the_run_and_bad_values_are_refused() {
         (vec!["--beta", "NaN"], "--beta NaN is not valid"),
         (vec!["--lookahead", "0"], "--lookahead 0 is not valid"),
         (vec!["--sight=-0.5"], "--sight -0.5 is not valid"),
+        (vec!["--clearance=-0.1"], "--clearance -0.1 is not valid"),
     ] {
         let mut all = vec!["navigate", "--terrain", "hill", "--direct"];
         all.extend_from_slice(&args);

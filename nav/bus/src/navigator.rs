@@ -111,6 +111,7 @@ async fn navigate(ctx: &Context, params: &NavParams, goal: Navigate) -> Result<(
                 turn_rps,
             }) => (FrameOutcome::Drive, *forward_mps, *turn_rps),
             Err(NavError::Plan(PlanError::NoPath { .. })) => (FrameOutcome::NoPath, 0.0, 0.0),
+            Err(NavError::NoProgress { .. }) => (FrameOutcome::NoProgress, 0.0, 0.0),
             Err(e) => return Err(HandlerError::new(format!("nav.navigate: {e}"))),
         };
         let loop_s = t0.elapsed().as_secs_f64();
@@ -131,6 +132,10 @@ async fn navigate(ctx: &Context, params: &NavParams, goal: Navigate) -> Result<(
         match outcome {
             FrameOutcome::Reached => return Ok(()),
             FrameOutcome::NoPath => return Err(HandlerError::new(NO_PATH_REASON)),
+            FrameOutcome::NoProgress => {
+                let reason = step.err().map(|e| e.to_string()).unwrap_or_default();
+                return Err(HandlerError::new(reason));
+            }
             FrameOutcome::Drive => {}
         }
         let driven = ctx

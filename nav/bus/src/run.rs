@@ -136,7 +136,10 @@ pub async fn run_with(
         goal,
     )?;
     let mut path: Vec<[f64; 2]> = sim.poses.iter().map(|p| [p.x_m, p.y_m]).collect();
-    if matches!(last, Some(FrameOutcome::Reached | FrameOutcome::NoPath)) {
+    if matches!(
+        last,
+        Some(FrameOutcome::Reached | FrameOutcome::NoPath | FrameOutcome::NoProgress)
+    ) {
         path.push([sim.pose.x_m, sim.pose.y_m]);
     }
     let untraversable_frames = path

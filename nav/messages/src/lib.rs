@@ -190,6 +190,8 @@ pub enum FrameOutcome {
     Reached,
     /// The map as perceived has no traversable path to the goal; the goal fails.
     NoPath,
+    /// The robot has not moved for many frames while told to; the goal fails.
+    NoProgress,
 }
 
 /// Inform: one frame of the navigator's loop.

@@ -29,7 +29,7 @@ mod wheeled;
 
 pub use base::{Base, Motion};
 pub use courses::{Course, course_by_name, hill_course, ramps_course};
-pub use navigator::{Command, NavError, NavParams, Navigator};
+pub use navigator::{Command, NavError, NavParams, Navigator, STILL_M, STILL_RAD};
 pub use perceived::{CellChange, Inserted, PerceivedMap};
 pub use picture::write_picture;
 pub use presets::{WHEELED_MOUNT, wheeled_params};

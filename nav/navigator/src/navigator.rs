@@ -34,6 +34,18 @@ pub enum NavError {
         /// Row.
         iy: usize,
     },
+    /// The base has not moved for this many frames while told to: the navigator gives up.
+    #[error(
+        "no progress: the robot stayed at ({x:.3}, {y:.3}) m for {frames} frames while told to move (its base cannot do what it is told there: it collides, or a walking base finds no step); try another start, goal or robot"
+    )]
+    NoProgress {
+        /// Frames it stood still.
+        frames: usize,
+        /// East, m (the estimate).
+        x: f64,
+        /// North, m (the estimate).
+        y: f64,
+    },
     /// The start or goal lies outside the map.
     #[error("the {what} ({x:.3}, {y:.3}) m lies outside the map; give one on the terrain")]
     OffMap {
@@ -98,7 +110,17 @@ pub struct NavParams {
     /// The LTM Matcher: register each frame against the map so far and correct the pose
     /// frames are placed with (and the navigator steers by); `None`: the odometry alone.
     pub matcher: Option<MatchParams>,
+    /// Frames in a row the estimate may stay where it is (within [`STILL_M`] and
+    /// [`STILL_RAD`]) while the navigator commands motion before it gives up with
+    /// [`NavError::NoProgress`]: the base cannot carry out what it is told (it collides, or
+    /// a walking base finds no step). 0: never give up.
+    pub stall_frames: usize,
 }
+
+/// How far the estimate may move, m, and still count as standing still.
+pub const STILL_M: f64 = 0.01;
+/// How far the estimate may turn, rad, and still count as standing still.
+pub const STILL_RAD: f64 = 0.02;
 
 impl NavParams {
     /// Defaults for a robot with these danger parameters and camera mount.
@@ -121,6 +143,7 @@ impl NavParams {
             sight_m: 0.0,
             frame_period_s: 0.25,
             matcher: None,
+            stall_frames: 60,
         }
     }
 }
@@ -165,6 +188,8 @@ pub struct Navigator {
     last_explored: Option<(Point2<f64>, Pose2)>,
     travelled_since_turn_m: f64,
     last_pose: Option<Pose2>,
+    /// Where the estimate has stood since, and for how many frames.
+    still: Option<(Pose2, usize)>,
     turns: u64,
 }
 
@@ -220,6 +245,7 @@ impl Navigator {
             last_explored: None,
             travelled_since_turn_m: 0.0,
             last_pose: None,
+            still: None,
             turns: 0,
         })
     }
@@ -305,6 +331,7 @@ impl Navigator {
         if (self.goal - here).norm() <= self.params.goal_tolerance_m {
             return Ok(Command::Reached);
         }
+        self.check_progress(estimate)?;
         let me = self.cells.nearest_cell(here);
         self.planner.move_start(Cell::new(me.ix, me.iy))?;
         let path = self.planner.plan()?.cells;
@@ -314,6 +341,32 @@ impl Navigator {
         }
         self.path = path;
         Ok(self.motion(estimate))
+    }
+
+    /// Counts the frames the estimate has stood still; past [`NavParams::stall_frames`] the
+    /// navigator gives up.
+    fn check_progress(&mut self, estimate: Pose2) -> Result<(), NavError> {
+        if self.params.stall_frames == 0 {
+            return Ok(());
+        }
+        let (anchor, frames) = self.still.get_or_insert((estimate, 0));
+        let turned = (estimate.yaw - anchor.yaw)
+            .sin()
+            .atan2((estimate.yaw - anchor.yaw).cos());
+        if anchor.distance(&estimate) <= STILL_M && turned.abs() <= STILL_RAD {
+            *frames += 1;
+        } else {
+            *anchor = estimate;
+            *frames = 0;
+        }
+        if *frames >= self.params.stall_frames {
+            return Err(NavError::NoProgress {
+                frames: *frames,
+                x: estimate.x,
+                y: estimate.y,
+            });
+        }
+        Ok(())
     }
 
     /// Counts an untraversable cell in (`delta` 1) or out (-1) of the clearance of the

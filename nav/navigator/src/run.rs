@@ -224,6 +224,10 @@ pub fn run(
                 report.reason = "no traversable path to the goal on the map as perceived".into();
                 break;
             }
+            Err(e @ NavError::NoProgress { .. }) => {
+                report.reason = e.to_string();
+                break;
+            }
             Err(e) => return Err(e),
         }
     }

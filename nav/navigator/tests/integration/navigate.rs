@@ -65,3 +65,59 @@ fn check(course: &Course, seed: u64) {
 fn the_wheeled_base_goes_around_the_hill() {
     check(&hill_course().unwrap(), 1);
 }
+
+/// A base that is told to move and never does (stuck on something it cannot cross).
+struct Stuck {
+    pose: tca_nav_navigator::Pose2,
+}
+
+impl tca_nav_navigator::Base for Stuck {
+    fn name(&self) -> &str {
+        "stuck"
+    }
+    fn true_pose(&self) -> tca_nav_navigator::Pose2 {
+        self.pose
+    }
+    fn attitude(&self) -> tca_nav_navigator::Attitude {
+        tca_nav_navigator::Attitude::default()
+    }
+    fn drive(
+        &mut self,
+        _forward_mps: f64,
+        _turn_rps: f64,
+        _dt_s: f64,
+    ) -> tca_nav_navigator::Motion {
+        tca_nav_navigator::Motion {
+            pose: self.pose,
+            collided: true,
+            fell: false,
+        }
+    }
+}
+
+#[test]
+fn a_base_that_never_moves_ends_the_run_with_a_reason_after_the_stall_frames() {
+    let course = hill_course().unwrap();
+    let mut base = Stuck { pose: course.start };
+    let opts = RunOptions {
+        start: course.start,
+        goal_offset: course.goal_offset,
+        drift: 0.0125,
+        seed: 1,
+        max_frames: 1500,
+    };
+    let params = wheeled_params();
+    let stall = params.stall_frames;
+    assert!(stall > 0);
+    let (r, _) = run(&course.terrain, &mut base, params, &opts).unwrap();
+    assert!(!r.reached);
+    assert!(r.reason.contains("no progress"), "{}", r.reason);
+    assert!(
+        r.reason.contains(&format!("{stall} frames")),
+        "{}",
+        r.reason
+    );
+    // It gave up once the estimate had stood still for the stall frames, not at the limit.
+    assert_eq!(r.frames, stall, "{}", r.reason);
+    assert_eq!(r.distance_m, 0.0);
+}
