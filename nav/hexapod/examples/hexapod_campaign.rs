@@ -6,8 +6,9 @@
 use std::sync::Arc;
 
 use tca_legged_model::RobotModel;
+use tca_nav_danger_map::DangerMap;
 use tca_nav_hexapod::{HexapodBase, StepperParams, hexapod_params};
-use tca_nav_navigator::{RunOptions, hill_course, run};
+use tca_nav_navigator::{RunOptions, hill_course, run, true_danger_map};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1).map(|a| a.parse::<u64>());
@@ -17,6 +18,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let model = Arc::new(RobotModel::builtin("hexapod")?);
     let terrain = Arc::new(course.terrain.clone());
     let params = hexapod_params(&model)?;
+    let truth = true_danger_map(&course.terrain, &params)?;
     let mut ok = 0;
     for seed in first..first + seeds {
         let mut base = HexapodBase::new(
@@ -54,7 +56,45 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             r.untraversable_frames,
             base.stalls()
         );
+        for (frame, p, depth) in untraversable_depths(&truth, &r.path) {
+            println!(
+                "  frame {frame}: true position ({:.3}, {:.3}) m, {:.3} m from the nearest traversable cell",
+                p[0], p[1], depth
+            );
+        }
     }
     println!("hill (hexapod): {ok} of {seeds} accepted");
     Ok(())
+}
+
+/// For each true position in a cell that is untraversable on the true terrain: the frame, the
+/// position and how deep it is, the distance to the centre of the nearest traversable cell.
+fn untraversable_depths(truth: &DangerMap, path: &[[f64; 2]]) -> Vec<(usize, [f64; 2], f64)> {
+    let grid = truth.cells();
+    let reach = (0.5 / grid.resolution_m()).ceil() as isize;
+    let mut out = Vec::new();
+    for (frame, p) in path.iter().enumerate() {
+        let here = nalgebra::Point2::new(p[0], p[1]);
+        let Some(c) = grid.cell_at(here) else {
+            continue;
+        };
+        if truth.cell(c).is_traversable() {
+            continue;
+        }
+        let mut depth = f64::INFINITY;
+        for dy in -reach..=reach {
+            for dx in -reach..=reach {
+                let (ix, iy) = (c.ix as isize + dx, c.iy as isize + dy);
+                if ix < 0 || iy < 0 {
+                    continue;
+                }
+                let n = tca_robot::CellIndex::new(ix as usize, iy as usize);
+                if grid.get(n).is_some() && truth.cell(n).is_traversable() {
+                    depth = depth.min((grid.cell_center(n) - here).norm());
+                }
+            }
+        }
+        out.push((frame, *p, depth));
+    }
+    out
 }
