@@ -34,7 +34,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             seed,
             max_frames: 600,
         };
-        let (r, _) = run(&course.terrain, &mut base, params.clone(), &opts)?;
+        let (r, nav) = run(&course.terrain, &mut base, params.clone(), &opts)?;
         let best = r.true_map_path_m.unwrap_or(f64::NAN);
         let accepted = r.meets_acceptance();
         ok += usize::from(accepted);
@@ -57,8 +57,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             base.stalls()
         );
         for (frame, p, depth) in untraversable_depths(&truth, &r.path) {
+            let here = nalgebra::Point2::new(p[0], p[1]);
+            let (seen, gap) = perceived_near(nav.danger(), here);
             println!(
-                "  frame {frame}: true position ({:.3}, {:.3}) m, {:.3} m from the nearest traversable cell",
+                "  frame {frame}: true position ({:.3}, {:.3}) m, {:.3} m from the nearest traversable cell; at the run's end the navigator's map gives its cell danger {seen:.2} and its nearest untraversable cell is {gap:.3} m away",
                 p[0], p[1], depth
             );
         }
@@ -97,4 +99,31 @@ fn untraversable_depths(truth: &DangerMap, path: &[[f64; 2]]) -> Vec<(usize, [f6
         out.push((frame, *p, depth));
     }
     out
+}
+
+/// The danger of the cell at `here` in `map`, and the distance from `here` to the centre of
+/// the nearest untraversable cell of `map` (within 0.5 m; infinite if none).
+fn perceived_near(
+    map: &tca_robot::Grid<tca_nav_danger_map::CellDanger>,
+    here: nalgebra::Point2<f64>,
+) -> (f64, f64) {
+    let Some(c) = map.cell_at(here) else {
+        return (f64::NAN, f64::INFINITY);
+    };
+    let danger = map.get(c).map_or(f64::NAN, |d| d.danger);
+    let reach = (0.5 / map.resolution_m()).ceil() as isize;
+    let mut gap = f64::INFINITY;
+    for dy in -reach..=reach {
+        for dx in -reach..=reach {
+            let (ix, iy) = (c.ix as isize + dx, c.iy as isize + dy);
+            if ix < 0 || iy < 0 {
+                continue;
+            }
+            let n = tca_robot::CellIndex::new(ix as usize, iy as usize);
+            if map.get(n).is_some_and(|d| d.danger.is_infinite()) {
+                gap = gap.min((map.cell_center(n) - here).norm());
+            }
+        }
+    }
+    (danger, gap)
 }
