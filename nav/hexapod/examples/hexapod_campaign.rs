@@ -58,9 +58,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         for (frame, p, depth) in untraversable_depths(&truth, &r.path) {
             let here = nalgebra::Point2::new(p[0], p[1]);
-            let (seen, gap) = perceived_near(nav.danger(), here);
+            let (seen, certainty, gap) = perceived_near(nav.danger(), here);
             println!(
-                "  frame {frame}: true position ({:.3}, {:.3}) m, {:.3} m from the nearest traversable cell; at the run's end the navigator's map gives its cell danger {seen:.2} and its nearest untraversable cell is {gap:.3} m away",
+                "  frame {frame}: true position ({:.3}, {:.3}) m, {:.3} m from the nearest traversable cell; at the run's end the navigator's map gives its cell danger {seen:.2} (certainty {certainty:.2}) and its nearest untraversable cell is {gap:.3} m away",
                 p[0], p[1], depth
             );
         }
@@ -101,16 +101,17 @@ fn untraversable_depths(truth: &DangerMap, path: &[[f64; 2]]) -> Vec<(usize, [f6
     out
 }
 
-/// The danger of the cell at `here` in `map`, and the distance from `here` to the centre of
-/// the nearest untraversable cell of `map` (within 0.5 m; infinite if none).
+/// The danger and certainty of the cell at `here` in `map`, and the distance from `here` to
+/// the centre of the nearest untraversable cell of `map` (within 0.5 m; infinite if none).
 fn perceived_near(
     map: &tca_robot::Grid<tca_nav_danger_map::CellDanger>,
     here: nalgebra::Point2<f64>,
-) -> (f64, f64) {
+) -> (f64, f64, f64) {
     let Some(c) = map.cell_at(here) else {
-        return (f64::NAN, f64::INFINITY);
+        return (f64::NAN, f64::NAN, f64::INFINITY);
     };
     let danger = map.get(c).map_or(f64::NAN, |d| d.danger);
+    let certainty = map.get(c).map_or(f64::NAN, |d| d.certainty);
     let reach = (0.5 / map.resolution_m()).ceil() as isize;
     let mut gap = f64::INFINITY;
     for dy in -reach..=reach {
@@ -125,5 +126,5 @@ fn perceived_near(
             }
         }
     }
-    (danger, gap)
+    (danger, certainty, gap)
 }
