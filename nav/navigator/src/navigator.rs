@@ -306,9 +306,9 @@ impl Navigator {
                 let Some(slot) = self.cells.get_mut(c) else {
                     return Err(NavError::ChangeOffMap { ix: c.ix, iy: c.iy });
                 };
-                let before = slot.danger;
+                let (before, certainty_before) = (slot.danger, slot.certainty);
                 *slot = change.danger;
-                if before == change.danger.danger {
+                if before == change.danger.danger && certainty_before == change.danger.certainty {
                     continue;
                 }
                 replanned.push(c);
@@ -388,10 +388,19 @@ impl Navigator {
         }
     }
 
-    /// The danger D* Lite plans a cell with: the map's, raised to 1 within the clearance of
-    /// an untraversable cell.
+    /// The danger D* Lite plans a cell with: the map's, with the unknown part of the cell's
+    /// circle counted as d = 1 (`certainty * d + (1 - certainty)`, so that a circle seen
+    /// only in part, which may miss a slope beside it, does not plan as flat), raised to 1
+    /// within the clearance of an untraversable cell.
     fn planned_danger(&self, c: CellIndex) -> f64 {
-        let d = self.cells.get(c).map_or(1.0, |d| d.danger);
+        let d = self.cells.get(c).map_or(1.0, |d| {
+            if d.danger.is_finite() {
+                let k = d.certainty.clamp(0.0, 1.0);
+                k * d.danger + (1.0 - k)
+            } else {
+                d.danger
+            }
+        });
         let i = c.iy * self.cells.nx() + c.ix;
         if d.is_finite() && self.near_untraversable.get(i).is_some_and(|&n| n > 0) {
             d.max(1.0)
