@@ -6,9 +6,10 @@
 use std::sync::Arc;
 
 use tca_legged_model::RobotModel;
-use tca_nav_danger_map::DangerMap;
+use tca_nav_danger_map::{CellDanger, DangerMap};
 use tca_nav_hexapod::{HexapodBase, StepperParams, hexapod_params};
 use tca_nav_navigator::{RunOptions, hill_course, run, true_danger_map};
+use tca_robot::{CellIndex, Grid};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1).map(|a| a.parse::<u64>());
@@ -73,58 +74,52 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// position and how deep it is, the distance to the centre of the nearest traversable cell.
 fn untraversable_depths(truth: &DangerMap, path: &[[f64; 2]]) -> Vec<(usize, [f64; 2], f64)> {
     let grid = truth.cells();
-    let reach = (0.5 / grid.resolution_m()).ceil() as isize;
     let mut out = Vec::new();
     for (frame, p) in path.iter().enumerate() {
         let here = nalgebra::Point2::new(p[0], p[1]);
-        let Some(c) = grid.cell_at(here) else {
-            continue;
-        };
-        if truth.cell(c).is_traversable() {
-            continue;
+        if grid
+            .cell_at(here)
+            .is_some_and(|c| !truth.cell(c).is_traversable())
+        {
+            out.push((frame, *p, nearest(grid, here, CellDanger::is_traversable)));
         }
-        let mut depth = f64::INFINITY;
-        for dy in -reach..=reach {
-            for dx in -reach..=reach {
-                let (ix, iy) = (c.ix as isize + dx, c.iy as isize + dy);
-                if ix < 0 || iy < 0 {
-                    continue;
-                }
-                let n = tca_robot::CellIndex::new(ix as usize, iy as usize);
-                if grid.get(n).is_some() && truth.cell(n).is_traversable() {
-                    depth = depth.min((grid.cell_center(n) - here).norm());
-                }
-            }
-        }
-        out.push((frame, *p, depth));
     }
     out
 }
 
 /// The danger and certainty of the cell at `here` in `map`, and the distance from `here` to
 /// the centre of the nearest untraversable cell of `map` (within 0.5 m; infinite if none).
-fn perceived_near(
-    map: &tca_robot::Grid<tca_nav_danger_map::CellDanger>,
-    here: nalgebra::Point2<f64>,
-) -> (f64, f64, f64) {
-    let Some(c) = map.cell_at(here) else {
+fn perceived_near(map: &Grid<CellDanger>, here: nalgebra::Point2<f64>) -> (f64, f64, f64) {
+    let Some(d) = map.cell_at(here).and_then(|c| map.get(c)) else {
         return (f64::NAN, f64::NAN, f64::INFINITY);
     };
-    let danger = map.get(c).map_or(f64::NAN, |d| d.danger);
-    let certainty = map.get(c).map_or(f64::NAN, |d| d.certainty);
-    let reach = (0.5 / map.resolution_m()).ceil() as isize;
-    let mut gap = f64::INFINITY;
+    let gap = nearest(map, here, |d| d.danger.is_infinite());
+    (d.danger, d.certainty, gap)
+}
+
+/// The distance from `here` to the centre of the nearest cell of `grid` within 0.5 m for
+/// which `wanted` holds; infinite if none.
+fn nearest(
+    grid: &Grid<CellDanger>,
+    here: nalgebra::Point2<f64>,
+    wanted: impl Fn(&CellDanger) -> bool,
+) -> f64 {
+    let Some(c) = grid.cell_at(here) else {
+        return f64::INFINITY;
+    };
+    let reach = (0.5 / grid.resolution_m()).ceil() as isize;
+    let mut best = f64::INFINITY;
     for dy in -reach..=reach {
         for dx in -reach..=reach {
             let (ix, iy) = (c.ix as isize + dx, c.iy as isize + dy);
             if ix < 0 || iy < 0 {
                 continue;
             }
-            let n = tca_robot::CellIndex::new(ix as usize, iy as usize);
-            if map.get(n).is_some_and(|d| d.danger.is_infinite()) {
-                gap = gap.min((map.cell_center(n) - here).norm());
+            let n = CellIndex::new(ix as usize, iy as usize);
+            if grid.get(n).is_some_and(&wanted) {
+                best = best.min((grid.cell_center(n) - here).norm());
             }
         }
     }
-    (danger, certainty, gap)
+    best
 }
