@@ -64,3 +64,6 @@ pub fn transport_for(endpoint: &str) -> Result<std::sync::Arc<dyn Transport>> {
         ])))
     }
 }
+
+#[cfg(test)]
+mod access_control_tests;

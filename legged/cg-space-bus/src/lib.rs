@@ -53,3 +53,6 @@ pub use messages::{
 };
 pub use setup::{SetupError, TerrainSource, WorkerSetup};
 pub use worker::{MAX_MARGIN, Worker, WorkerError, connect_worker};
+
+#[cfg(test)]
+mod distributed_tests;

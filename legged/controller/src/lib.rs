@@ -61,3 +61,6 @@ mod telemetry;
 
 pub use config::{DEFAULT_MODULE_NAME, InjectedFault, LeggedControllerConfig, MAX_TELEMETRY_HZ};
 pub use serve::connect;
+
+#[cfg(test)]
+mod bus_tests;

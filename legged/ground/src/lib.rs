@@ -27,3 +27,6 @@ pub use error::GroundError;
 pub use footfall::{FootfallSessionOptions, FootfallStep, run_footfall_session};
 pub use monitor::{MONITOR_NAME, MonitorOptions, Received, connect_monitor};
 pub use session::{SessionOptions, SessionReport, StepRecord, plan_steps, run_session};
+
+#[cfg(test)]
+mod footfall_session_tests;

@@ -79,3 +79,6 @@ pub use margin::{
 pub use mass::centre_of_mass;
 pub use polygon::Polygon;
 pub use quadrants::{Quadrant, QuadrantReport, quadrant_test};
+
+#[cfg(test)]
+mod properties_tests;

@@ -38,3 +38,6 @@ pub use system::{LEGGED_MODULES, LeggedPlanner, LeggedSetup, connect_all, connec
 pub use tca_legged_controller::InjectedFault;
 pub use terrain::LeggedTerrain;
 pub use walk::{LeggedWalkOptions, WalkWorkers, walk};
+
+#[cfg(test)]
+mod cg_workers_tests;

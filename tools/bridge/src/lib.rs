@@ -70,3 +70,6 @@ pub use recorded::{Recorded, RecordedCrossing};
 pub use select::Forwarded;
 pub use side::{Direction, Side};
 pub use stats::DelayStats;
+
+#[cfg(test)]
+mod bridge_tests;

@@ -4,12 +4,12 @@
 //! grid nudged by 1e-15 to 1e-7 m, so that duplicate, nearly duplicate, collinear and nearly
 //! collinear feet, and feet on or just off edges, turn up often.
 
-use nalgebra::{Point2, Point3};
-use proptest::prelude::*;
-use tca_stability::{
+use crate::{
     Polygon, Quadrant, centre_of_mass, conservative_support_polygon, margin_along,
     margin_along_path, quadrant_test, stability_margin, support_polygon,
 };
+use nalgebra::{Point2, Point3};
+use proptest::prelude::*;
 
 /// Absolute tolerance for comparisons, metres (coordinates are within 5 m of the origin).
 const EPS: f64 = 1e-9;

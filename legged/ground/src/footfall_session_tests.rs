@@ -7,7 +7,7 @@
 
 use std::time::Duration;
 
-use tca_legged_ground::{DemoOptions, FootfallSessionOptions, Operator, demo};
+use crate::{DemoOptions, FootfallSessionOptions, Operator, demo};
 use tca_testkit::within_for;
 
 /// A delay a little late is the machine's load; the figures are in BENCHMARKS.md.

@@ -3,9 +3,9 @@
 
 use std::sync::Arc;
 
+use crate::{LeggedControllerConfig, connect};
 use nalgebra::{Point2, Vector3};
 use serde::{Deserialize, Serialize};
-use tca_legged_controller::{LeggedControllerConfig, connect};
 use tca_legged_messages::{
     BodyMove, BodyPose, FootContact, Halt, HardwareFault, LegMove, LegState, LeggedStatus,
     MoveFailed, MoveFailureKind, Resume, RobotModel as RobotModelQuery, SupportState,

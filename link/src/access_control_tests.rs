@@ -7,7 +7,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use tca_link::zenoh::{
+use crate::zenoh::{
     CENTRAL_ALIVE_KEY, RouterSecurity, ZenohLogin, acl, alive_key, client_config_with_login,
     down_key, router_config_secured, up_key, up_key_pattern,
 };
@@ -225,7 +225,7 @@ async fn each_identity_is_confined_to_its_own_keys() {
 async fn a_user_outside_the_dictionary_cannot_open_a_session() {
     let dir = tempfile::tempdir().unwrap();
     let (router, endpoint) = router(dir.path(), &[("gait", "pg")]).await;
-    let config = tca_link::zenoh::client_config(std::slice::from_ref(&endpoint)).unwrap();
+    let config = crate::zenoh::client_config(std::slice::from_ref(&endpoint)).unwrap();
     assert!(zenoh::open(config).await.is_err(), "no login was admitted");
     let wrong = ZenohLogin::new("gait", "guess");
     let config = client_config_with_login(&[endpoint], Some(&wrong)).unwrap();

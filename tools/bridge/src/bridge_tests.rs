@@ -5,8 +5,8 @@
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use crate::{BridgeConfig, Direction, NamePattern, PlaybackOptions, Recorded, RunningBridge};
 use serde::{Deserialize, Serialize};
-use tca_bridge::{BridgeConfig, Direction, NamePattern, PlaybackOptions, Recorded, RunningBridge};
 use tca_messages::control::TaskOutcome;
 use tca_module::{Connector, HandlerError, Module};
 use tca_testkit::{TestCentral, TransportKind, within};
@@ -205,7 +205,7 @@ async fn sides(transport: TransportKind) -> Sides {
 }
 
 async fn bridge(config: BridgeConfig) -> RunningBridge {
-    within("the bridge starts", tca_bridge::start(config))
+    within("the bridge starts", crate::start(config))
         .await
         .expect("the bridge starts")
 }
@@ -492,7 +492,7 @@ async fn the_log_measures_every_crossing_and_plays_back_the_same() {
     let player = tokio::spawn({
         let ground = ground2.connector.clone();
         async move {
-            tca_bridge::play(
+            crate::play(
                 &recorded,
                 PlaybackOptions {
                     ground,
@@ -616,7 +616,7 @@ async fn names_no_side_handles_and_simulated_centrals_are_refused() {
         .messages
         .push(NamePattern::parse("t.nobody").unwrap());
     c.wait = Duration::from_millis(600);
-    let e = within("the bridge gives up", tca_bridge::start(c))
+    let e = within("the bridge gives up", crate::start(c))
         .await
         .err()
         .expect("refused")
@@ -632,7 +632,7 @@ async fn names_no_side_handles_and_simulated_centrals_are_refused() {
     .await;
     let e = within(
         "the bridge refuses a simulated central",
-        tca_bridge::start(BridgeConfig::new(
+        crate::start(BridgeConfig::new(
             sim.connector.clone(),
             s.ground.connector.clone(),
         )),

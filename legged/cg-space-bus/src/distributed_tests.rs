@@ -5,15 +5,15 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use crate::{
+    DistributedJoiner, InProcessWorkers, JoinBatch, JoinerOptions, Worker, WorkerError,
+    WorkerFactory, WorkerHandle, join_registration, worker_name,
+};
 use futures::future::BoxFuture;
 use nalgebra::Point2;
 use tca_cg_space::{
     BatchParams, BatchedRouteError, CgCell, CgParams, CgRobot, CgSpace, JoinError, JoinQuery,
     Joiner, Joins, LocalJoiner, Partition, Route, RouteParams, plan_route_batched,
-};
-use tca_cg_space_bus::{
-    DistributedJoiner, InProcessWorkers, JoinBatch, JoinerOptions, Worker, WorkerError,
-    WorkerFactory, WorkerHandle, join_registration, worker_name,
 };
 use tca_legged_courses::Course;
 use tca_legged_model::RobotModel;

@@ -3,9 +3,9 @@
 //! simulated clock counts the handler as waiting for them), and the log passes the audit and
 //! the time check.
 
+use crate::walk::Progress;
+use crate::{LeggedPlanner, LeggedTerrain, LeggedWalkOptions, WalkWorkers, walk};
 use tca_cg_space::PlanParams;
-use tca_legged_walk::walk::Progress;
-use tca_legged_walk::{LeggedPlanner, LeggedTerrain, LeggedWalkOptions, WalkWorkers, walk};
 use tca_logs::{Direction, LogFile, RecordKind};
 use tca_messages::Class;
 
