@@ -11,6 +11,9 @@
 //!
 //! Run: `cargo bench --bench journal_cost` (`JOURNAL_PAIRS`, default 30, and `JOURNAL_GOALS`
 //! per flood, default 100000). Figures in BENCHMARKS.md.
+//!
+//! For a profiler, `JOURNAL_ONLY=with` (or `without`) floods one side alone, `JOURNAL_PAIRS`
+//! times, so that a profile of the process shows that side's costs and no other's.
 
 use std::time::Duration;
 
@@ -122,6 +125,27 @@ fn main() {
         .enable_all()
         .build()
         .expect("runtime");
+    if let Ok(only) = std::env::var("JOURNAL_ONLY") {
+        let journal = match only.as_str() {
+            "with" => true,
+            "without" => false,
+            _ => {
+                eprintln!("JOURNAL_ONLY={only}: give `with` or `without`");
+                std::process::exit(2);
+            }
+        };
+        let side = rt.block_on(Side::start(journal));
+        side.rate(&rt, goals / 2);
+        let rates: Vec<f64> = (0..pairs).map(|_| side.rate(&rt, goals)).collect();
+        println!(
+            "journal_cost: {only} a journal alone, {pairs} floods of {goals} goals: mean {:.0} \
+             goals/s, median {:.0}",
+            mean(&rates),
+            median(&rates)
+        );
+        rt.block_on(side.central.shutdown()).expect("shutdown");
+        return;
+    }
     let plain = rt.block_on(Side::start(false));
     let journaled = rt.block_on(Side::start(true));
     // Warm-up: allocators, the log files and the journal's first rewrite.

@@ -248,7 +248,15 @@ async fn the_walking_system_is_driven_by_hand() {
         &["no live task was created by message m999.1"],
     )
     .await;
-    refused(e, &["kill", "soon"], &["names no task"]).await;
+    for bad in ["soon", "m3", "x", "n", "m3.x", "m-1.2"] {
+        refused(e, &["kill", bad], &["names no task"]).await;
+    }
+    // A node's number, with or without its `n`, reaches central (which has no such node).
+    refused(e, &["kill", "n999999"], &["cannot kill n999999"]).await;
+    refused(e, &["kill", "999999"], &["cannot kill 999999"]).await;
+    // A name like none of the registry's gets no suggestion.
+    let (status, _, err) = tca_at(e, &["call", "acquireImage"]).await;
+    assert!(!status.success() && !err.contains("did you mean"), "{err}");
     assert_eq!(
         carriage_y(e).await,
         y1,

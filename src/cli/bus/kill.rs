@@ -59,19 +59,3 @@ pub(crate) async fn run(args: KillArgs) -> anyhow::Result<ExitCode> {
     }
     Ok(ExitCode::SUCCESS)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn nodes_and_message_ids_are_told_apart() {
-        assert_eq!(parse("n5").unwrap(), Target::Node(NodeId(5)));
-        assert_eq!(parse("12").unwrap(), Target::Node(NodeId(12)));
-        assert_eq!(parse("m3.7").unwrap(), Target::Task(MessageId::new(3, 7)));
-        for bad in ["m3", "x", "n", "m3.x", "-1"] {
-            let err = parse(bad).unwrap_err().to_string();
-            assert!(err.contains("names no task"), "{bad}: {err}");
-        }
-    }
-}

@@ -102,20 +102,3 @@ fn closest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Option<
         .min_by_key(|(d, _)| *d)
         .map(|(_, c)| c)
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn slips_are_suggested_and_strangers_not() {
-        let names = ["bodyMove", "bodyPosition", "legMove"];
-        assert_eq!(closest("bodyMov", names.into_iter()), Some("bodyMove"));
-        assert_eq!(
-            closest("bodyposition", names.into_iter()),
-            Some("bodyPosition")
-        );
-        assert_eq!(closest("bodyPos", names.into_iter()), Some("bodyPosition"));
-        assert_eq!(closest("acquireImage", names.into_iter()), None);
-    }
-}
