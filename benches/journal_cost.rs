@@ -12,6 +12,10 @@
 //! Run: `cargo bench --bench journal_cost` (`JOURNAL_PAIRS`, default 30, and `JOURNAL_GOALS`
 //! per flood, default 100000). Figures in BENCHMARKS.md.
 //!
+//! `JOURNAL_AA=1` runs the same pairs with neither side keeping a journal: the "cost" it
+//! prints is the bench's own bias (the order the sides were started in, their memory), which
+//! should be near zero.
+//!
 //! For a profiler, `JOURNAL_ONLY=with` (or `without`) floods one side alone, `JOURNAL_PAIRS`
 //! times, so that a profile of the process shows that side's costs and no other's.
 
@@ -147,11 +151,15 @@ fn main() {
         return;
     }
     let plain = rt.block_on(Side::start(false));
-    let journaled = rt.block_on(Side::start(true));
+    let aa = std::env::var("JOURNAL_AA").is_ok_and(|v| v == "1");
+    let journaled = rt.block_on(Side::start(!aa));
     // Warm-up: allocators, the log files and the journal's first rewrite.
     plain.rate(&rt, goals / 2);
     journaled.rate(&rt, goals / 2);
     println!("journal_cost: {pairs} pairs of {goals}-goal floods, in-process, logging on");
+    if aa {
+        println!("JOURNAL_AA=1: neither side keeps a journal (the bench's own bias)");
+    }
     let mut costs = Vec::with_capacity(pairs);
     let (mut sum_plain, mut sum_journaled) = (0.0, 0.0);
     for i in 0..pairs {

@@ -21,6 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{Action, Central, Event, InboxUse, LinkId, OutboxUse};
 use crate::config::CentralConfig;
+use crate::journal::format;
 use crate::policy::{Grant, Permissions};
 
 /// One event the core handled, with its time and the facts it looked up.
@@ -64,22 +65,54 @@ pub enum JournaledEvent {
     Identified(LinkId, String),
 }
 
-impl From<&Event> for JournaledEvent {
-    fn from(event: &Event) -> Self {
+/// An [`Event`] borrowed, serialized exactly as the [`JournaledEvent`] it journals as (the
+/// same variants, in the same order, with the same fields), so that an entry is written
+/// straight from the event: its frame is neither copied into a new buffer nor shared (a shared
+/// frame's count is an atomic the sending thread touches too).
+#[derive(Serialize)]
+enum JournaledEventRef<'a> {
+    Opened(LinkId),
+    Frame(LinkId, RawBytes<'a>),
+    Closed(LinkId),
+    Tick,
+    InboxFull(LinkId, RawBytes<'a>, (u64, u64)),
+    InboxDropped(LinkId, u64),
+    OutboxLevel(LinkId, (u64, u64)),
+    OutboxFull(LinkId, (u64, u64)),
+    Identified(LinkId, &'a str),
+}
+
+/// Bytes serialized as a byte string, as `tca_logs::record::bytes_serde` serializes [`Bytes`].
+struct RawBytes<'a>(&'a [u8]);
+
+impl Serialize for RawBytes<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_bytes(self.0)
+    }
+}
+
+impl<'a> From<&'a Event> for JournaledEventRef<'a> {
+    fn from(event: &'a Event) -> Self {
         match event {
-            Event::Opened(l) => JournaledEvent::Opened(*l),
-            Event::Frame(l, f) => JournaledEvent::Frame(*l, f.clone()),
-            Event::Closed(l) => JournaledEvent::Closed(*l),
-            Event::Tick => JournaledEvent::Tick,
-            Event::InboxFull(l, f, u) => {
-                JournaledEvent::InboxFull(*l, f.clone(), (u.frames, u.bytes))
-            }
-            Event::InboxDropped(l, n) => JournaledEvent::InboxDropped(*l, *n),
-            Event::OutboxLevel(l, u) => JournaledEvent::OutboxLevel(*l, (u.frames, u.bytes)),
-            Event::OutboxFull(l, u) => JournaledEvent::OutboxFull(*l, (u.frames, u.bytes)),
-            Event::Identified(l, id) => JournaledEvent::Identified(*l, id.clone()),
+            Event::Opened(l) => Self::Opened(*l),
+            Event::Frame(l, f) => Self::Frame(*l, RawBytes(f)),
+            Event::Closed(l) => Self::Closed(*l),
+            Event::Tick => Self::Tick,
+            Event::InboxFull(l, f, u) => Self::InboxFull(*l, RawBytes(f), (u.frames, u.bytes)),
+            Event::InboxDropped(l, n) => Self::InboxDropped(*l, *n),
+            Event::OutboxLevel(l, u) => Self::OutboxLevel(*l, (u.frames, u.bytes)),
+            Event::OutboxFull(l, u) => Self::OutboxFull(*l, (u.frames, u.bytes)),
+            Event::Identified(l, id) => Self::Identified(*l, id),
         }
     }
+}
+
+/// An entry being written while its event is handled: where its record starts in the
+/// recorder's buffer, and the link of its frame (a hello's is rewritten with its secret
+/// blanked).
+pub(super) struct OpenEntry {
+    start: usize,
+    frame_link: Option<LinkId>,
 }
 
 impl From<JournaledEvent> for Event {
@@ -375,28 +408,49 @@ impl Central {
         }
     }
 
-    /// Called before an event is handled: what to journal for it.
-    pub(super) fn journal_begin(&self, event: &Event) -> Option<JournaledEvent> {
-        self.journal.on.then(|| JournaledEvent::from(event))
+    /// Called before an event is handled: starts its entry (the time and the event; the facts
+    /// looked up while handling it follow in [`Central::journal_end`]).
+    pub(super) fn journal_begin(&mut self, at_ns: u64, event: &Event) -> Option<OpenEntry> {
+        if !self.journal.on {
+            return None;
+        }
+        let buf = &mut self.journal.entries;
+        let start = format::begin_record(buf);
+        if let Err(e) = postcard::to_io(&(at_ns, JournaledEventRef::from(event)), &mut *buf) {
+            buf.truncate(start);
+            tracing::error!(error = %e, "an event could not be journaled");
+            return None;
+        }
+        let frame_link = match event {
+            Event::Frame(l, _) => Some(*l),
+            _ => None,
+        };
+        Some(OpenEntry { start, frame_link })
     }
 
-    /// Called after an event was handled: writes its entry.
-    pub(super) fn journal_end(&mut self, at_ns: u64, event: Option<JournaledEvent>) {
-        let Some(mut event) = event else {
+    /// Called after an event was handled: ends its entry with the facts looked up (the same
+    /// bytes as a [`JournalEntry`] of the time, the event and the facts).
+    pub(super) fn journal_end(&mut self, at_ns: u64, open: Option<OpenEntry>) {
+        let redacted = self.journal.redacted.take();
+        let Some(OpenEntry { start, frame_link }) = open else {
             return;
         };
-        if let (Some(redacted), JournaledEvent::Frame(_, frame)) =
-            (self.journal.redacted.take(), &mut event)
-        {
-            *frame = redacted;
+        let buf = &mut self.journal.entries;
+        let mut written: postcard::Result<()> = Ok(());
+        if let (Some(frame), Some(link)) = (redacted, frame_link) {
+            buf.truncate(start + format::RECORD_HEADER);
+            let event = JournaledEventRef::Frame(link, RawBytes(&frame));
+            written = postcard::to_io(&(at_ns, event), &mut *buf).map(drop);
         }
-        let entry = JournalEntry {
-            at_ns,
-            event,
-            facts: std::mem::take(&mut self.journal.facts),
-        };
-        if let Err(e) = crate::journal::format::append_record(&mut self.journal.entries, &entry) {
-            tracing::error!(error = %e, "an event could not be journaled");
+        let written = written
+            .and_then(|()| postcard::to_io(self.journal.facts.as_slice(), &mut *buf).map(drop));
+        self.journal.facts.clear();
+        match written {
+            Ok(()) => format::end_record(buf, start),
+            Err(e) => {
+                buf.truncate(start);
+                tracing::error!(error = %e, "an event could not be journaled");
+            }
         }
     }
 }

@@ -459,3 +459,64 @@ fn a_hello_is_journaled_without_its_secret_and_replayed_with_its_grant() {
     }
     assert_eq!(original, got);
 }
+
+#[test]
+fn every_event_is_journaled_as_the_entry_it_is_read_back_as() {
+    let frame = Bytes::from_static(b"a frame's bytes");
+    let inbox = InboxUse {
+        frames: 3,
+        bytes: 400,
+    };
+    let outbox = OutboxUse {
+        frames: 5,
+        bytes: 600,
+    };
+    let l: LinkId = 7;
+    let events = [
+        (Event::Opened(l), JournaledEvent::Opened(l)),
+        (
+            Event::Frame(l, frame.clone()),
+            JournaledEvent::Frame(l, frame.clone()),
+        ),
+        (Event::Closed(l), JournaledEvent::Closed(l)),
+        (Event::Tick, JournaledEvent::Tick),
+        (
+            Event::InboxFull(l, frame.clone(), inbox),
+            JournaledEvent::InboxFull(l, frame.clone(), (3, 400)),
+        ),
+        (
+            Event::InboxDropped(l, 9),
+            JournaledEvent::InboxDropped(l, 9),
+        ),
+        (
+            Event::OutboxLevel(l, outbox),
+            JournaledEvent::OutboxLevel(l, (5, 600)),
+        ),
+        (
+            Event::OutboxFull(l, outbox),
+            JournaledEvent::OutboxFull(l, (5, 600)),
+        ),
+        (
+            Event::Identified(l, "ctl".into()),
+            JournaledEvent::Identified(l, "ctl".into()),
+        ),
+    ];
+    for (i, (event, journaled)) in events.into_iter().enumerate() {
+        let at_ns = 1_000 + i as u64;
+        let mut core = Central::new(CentralConfig::default());
+        core.record_journal(1);
+        let open = core.journal_begin(at_ns, &event);
+        core.journal_end(at_ns, open);
+        let mut written = Vec::new();
+        core.take_journal(&mut written);
+        let mut expected = Vec::new();
+        let entry = JournalEntry {
+            at_ns,
+            event: journaled,
+            facts: Vec::new(),
+        };
+        format::append_record(&mut expected, &entry).unwrap();
+        assert_eq!(written, expected, "{entry:?}");
+        assert_eq!(entries(&written), vec![entry]);
+    }
+}

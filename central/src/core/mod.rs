@@ -248,7 +248,7 @@ impl Central {
     /// Handles one event at time `now_ns` (nanoseconds since the UNIX epoch), appending the
     /// resulting actions to `out`.
     pub fn handle(&mut self, now_ns: u64, event: Event, out: &mut Vec<Action>) {
-        let journaled = self.journal_begin(&event);
+        let journaled = self.journal_begin(now_ns, &event);
         self.now = self.now.max(now_ns);
         match event {
             Event::Opened(link) => self.link_opened(link, out),

@@ -16,7 +16,7 @@ use crate::core::JournalEntry;
 pub(crate) const MAGIC: &[u8; 8] = b"TCAJRNL1";
 
 /// Bytes before each record's payload: its length and its CRC-32.
-const RECORD_HEADER: usize = 8;
+pub(crate) const RECORD_HEADER: usize = 8;
 
 /// Largest record accepted when reading (a corrupt length is not believed past it).
 const MAX_RECORD: usize = 1 << 30;
@@ -50,18 +50,31 @@ pub struct Head {
 
 /// Appends `value` as one record to `buf` (nothing, if it does not serialize).
 pub(crate) fn append_record<T: Serialize>(buf: &mut Vec<u8>, value: &T) -> postcard::Result<()> {
-    let start = buf.len();
-    buf.extend_from_slice(&[0; RECORD_HEADER]);
+    let start = begin_record(buf);
     if let Err(e) = postcard::to_io(value, &mut *buf) {
         buf.truncate(start);
         return Err(e);
     }
+    end_record(buf, start);
+    Ok(())
+}
+
+/// Starts a record at the end of `buf`: its header, filled in by [`end_record`] once the
+/// payload follows it. Returns where the record starts.
+pub(crate) fn begin_record(buf: &mut Vec<u8>) -> usize {
+    let start = buf.len();
+    buf.extend_from_slice(&[0; RECORD_HEADER]);
+    start
+}
+
+/// Ends the record begun at `start`: its header gets the length and CRC-32 of the payload
+/// written after it.
+pub(crate) fn end_record(buf: &mut [u8], start: usize) {
     let payload = &buf[start + RECORD_HEADER..];
     let len = (payload.len() as u32).to_le_bytes();
     let crc = crc32fast::hash(payload).to_le_bytes();
     buf[start..start + 4].copy_from_slice(&len);
     buf[start + 4..start + RECORD_HEADER].copy_from_slice(&crc);
-    Ok(())
 }
 
 /// What a journal file holds.
