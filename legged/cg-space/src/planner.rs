@@ -28,6 +28,13 @@ pub struct PlanParams {
     /// heading, within this many cells in x and y): 0 marks the cell alone, as the paper's
     /// feedback would; more moves the next route further from where the search stuck.
     pub mark_radius: i32,
+    /// Route cells the planner backs off from the furthest cell a failed search reached
+    /// before it plans the rest again: the stance that reached that cell is the one the
+    /// search could not get on from, so the next search starts this many cells earlier
+    /// (never before where the failed search started), with room to set its feet for the
+    /// new way. 0 goes on from the furthest stance itself.
+    #[serde(default)]
+    pub backoff_cells: usize,
 }
 
 impl Default for PlanParams {
@@ -37,6 +44,7 @@ impl Default for PlanParams {
             search: SearchParams::default(),
             max_replans: 60,
             mark_radius: 2,
+            backoff_cells: 0,
         }
     }
 }
@@ -222,7 +230,8 @@ pub fn plan_with(
         // The stance the whole plan starts from: the given one, else the first chosen.
         let first = first_stance.get_or_insert_with(|| from.clone()).clone();
         let searched = search_checked(&mut search, &from, check, &route);
-        counts.add(&search.counts());
+        let this_counts = search.counts();
+        counts.add(&this_counts);
         match searched {
             Ok(mut found) => {
                 let mut steps = kept.clone();
@@ -283,6 +292,11 @@ pub fn plan_with(
                 tracing::debug!(
                     ?bad,
                     furthest = fail.furthest,
+                    from_k = from.k,
+                    nodes = fail.nodes,
+                    route_len = route.len(),
+                    by_legs = this_counts.refused_by_legs,
+                    by_check = this_counts.refused_by_check,
                     "foot search stuck; cell marked invalid"
                 );
                 space.mark_invalid(bad);
@@ -306,23 +320,30 @@ pub fn plan_with(
                     }
                 }
                 marked.push(bad);
-                // Keep the steps up to the stance that reached the furthest cell, and plan
-                // the rest of the route from there.
+                // Keep the steps up to the stance that reached the route cell `keep` (the
+                // furthest, less the back-off, but not before where this search started),
+                // and plan the rest of the route from there.
+                let keep = fail
+                    .furthest
+                    .saturating_sub(params.backoff_cells)
+                    .max(from.k);
                 let mut reached = from.clone();
                 let mut prefix = Vec::new();
                 for st in &fail.steps_to_furthest {
+                    if reached.k >= keep {
+                        break;
+                    }
                     apply(&mut reached, st);
                     prefix.push(*st);
                 }
-                let here = route[fail.furthest];
+                let here = route[keep];
                 let rest = routes_from.route(space, here, g, &params.route);
                 routes += 1;
                 match rest {
                     Ok(r) => {
-                        let mut new_route: Vec<CgCell> = route[..fail.furthest].to_vec();
+                        let mut new_route: Vec<CgCell> = route[..keep].to_vec();
                         new_route.extend(r.cells);
                         kept.extend(prefix);
-                        reached.k = fail.furthest;
                         stance = Some(reached);
                         route = new_route;
                     }

@@ -36,6 +36,13 @@ use tca_legged_model::RobotModel;
 use tca_module::Module;
 use tca_robot::HeightField;
 
+/// Nodes the foot-level search expands without getting further along the route before a
+/// walk's planner marks the next cell (see [`SearchParams`](tca_cg_space::SearchParams)).
+const WALK_STALL_NODES: usize = 3_000;
+/// Route cells a walk's planner backs off from where a search stuck before it searches the
+/// new route (see [`PlanParams::backoff_cells`]).
+const WALK_BACKOFF_CELLS: usize = 4;
+
 /// The robot is where a planned step starts when its body is within this share of a cell
 /// and every foot within [`FOOT_MATCH`] of one.
 const BODY_MATCH: f64 = 0.05;
@@ -119,13 +126,15 @@ impl CgSteps {
         cg.swing_rise_m.get_or_insert(2.0 * gait.clearance_m);
         let space = CgSpace::for_model(&model, &terrain, cg.clone()).map_err(|e| e.to_string())?;
         let mut params = params;
-        // A smaller budget hands a cell the robot cannot get past back to the route planner
-        // sooner.
-        params.search.stall_nodes = params.search.stall_nodes.min(1_000);
+        // The search's budget before it hands a cell back to the route planner: on the
+        // cliff course, 1,000 nodes gave up on cells a few hundred more would have passed,
+        // and the marks then walked the route round the goal until the replans ran out.
+        params.search.stall_nodes = params.search.stall_nodes.max(WALK_STALL_NODES);
         // Where the robot cannot get past a cell, its neighbours are usually no better (the
         // edge of a ramp): the next route keeps two cells further off.
         params.mark_radius = params.mark_radius.max(2);
         params.max_replans = params.max_replans.max(60);
+        params.backoff_cells = params.backoff_cells.max(WALK_BACKOFF_CELLS);
         let lift_m = 3.0 * gait.clearance_m;
         Ok(CgSteps {
             gait: FreeGait::new(model, gait),
@@ -338,11 +347,25 @@ type Reached = (GaitState, Option<StepPlan>);
 struct Executor<'a> {
     steps: &'a CgSteps,
     grid: CgGrid,
-    /// Per (route cell, stance): the robot's state there and the move that led to it.
-    states: RefCell<HashMap<(CgCell, Stance), Reached>>,
+    /// Per (route cell, stance): the robot's state there, the move that led to it, and the
+    /// generation of that state (a new one each time a move is carried out).
+    states: RefCell<HashMap<Place, (Reached, u64)>>,
+    /// Every move carried out so far, by where it started (place and the generation of the
+    /// state there) and where it ended: what it gave, `None` where the robot could not carry
+    /// it out. A search that runs again after a refusal offers the same moves again; they
+    /// are answered from here instead of being carried out again.
+    outcomes: RefCell<HashMap<MoveKey, Option<(Reached, u64)>>>,
+    generations: Cell<u64>,
     checked: Cell<usize>,
     refused: Cell<usize>,
 }
+
+/// A route cell and the stance there.
+type Place = (CgCell, Stance);
+
+/// A move by where it started (the place and the generation of the state there) and where
+/// it ended.
+type MoveKey = (Place, u64, Place);
 
 impl<'a> Executor<'a> {
     /// An executor whose plan starts from `state`.
@@ -360,12 +383,14 @@ impl<'a> Executor<'a> {
                 })
                 .collect();
             let start = Stance::new(0, feet, millimetres(t.z));
-            states.insert((cell, start), (state.clone(), None));
+            states.insert((cell, start), ((state.clone(), None), 0));
         }
         Executor {
             steps,
             grid: *grid,
             states: RefCell::new(states),
+            outcomes: RefCell::new(HashMap::new()),
+            generations: Cell::new(1),
             checked: Cell::new(0),
             refused: Cell::new(0),
         }
@@ -376,14 +401,14 @@ impl<'a> Executor<'a> {
         let states = self.states.borrow();
         let route = &found.feet.route;
         let mut stance = found.feet.start.clone();
-        let Some((mut at, _)) = states.get(&(route[0], stance.clone())).cloned() else {
+        let Some(((mut at, _), _)) = states.get(&(route[0], stance.clone())).cloned() else {
             return Err("the plan does not start where the robot stands".to_owned());
         };
         let mut steps = Vec::new();
         let mut pending: Option<(GaitState, StepPlan)> = None;
         for fs in &found.feet.steps {
             apply_step(&mut stance, fs);
-            let Some((end, Some(move_plan))) = states.get(&(route[stance.k], stance.clone()))
+            let Some(((end, Some(move_plan)), _)) = states.get(&(route[stance.k], stance.clone()))
             else {
                 return Err(format!("the plan's move {fs:?} was not checked"));
             };
@@ -418,14 +443,21 @@ impl MoveCheck for Executor<'_> {
         to: &Stance,
         to_cell: CgCell,
     ) -> bool {
-        let Some((state, _)) = self
-            .states
-            .borrow()
-            .get(&(from_cell, from.clone()))
-            .cloned()
-        else {
+        let start = (from_cell, from.clone());
+        let Some(((state, _), generation)) = self.states.borrow().get(&start).cloned() else {
             return false;
         };
+        let end = (to_cell, to.clone());
+        let key = (start, generation, end.clone());
+        if let Some(known) = self.outcomes.borrow().get(&key) {
+            return match known {
+                Some(reached) => {
+                    self.states.borrow_mut().insert(end, reached.clone());
+                    true
+                }
+                None => false,
+            };
+        }
         self.checked.set(self.checked.get() + 1);
         if self.checked.get().is_multiple_of(200) {
             tracing::debug!(
@@ -446,16 +478,134 @@ impl MoveCheck for Executor<'_> {
         };
         match planned {
             Ok(p) => {
-                self.states
-                    .borrow_mut()
-                    .insert((to_cell, to.clone()), (p.end.clone(), Some(p)));
+                let generation = self.generations.get();
+                self.generations.set(generation + 1);
+                let reached = ((p.end.clone(), Some(p)), generation);
+                self.states.borrow_mut().insert(end, reached.clone());
+                self.outcomes.borrow_mut().insert(key, Some(reached));
                 true
             }
             Err(why) => {
                 tracing::trace!(?step, %why, feet = ?state.legs.iter().map(|l| (l.stance, (l.foot.x * 100.0).round() / 100.0, (l.foot.y * 100.0).round() / 100.0, (l.foot.z * 100.0).round() / 100.0)).collect::<Vec<_>>(), body = ?state.body.translation.vector, "a move the robot cannot carry out");
                 self.refused.set(self.refused.get() + 1);
+                self.outcomes.borrow_mut().insert(key, None);
                 false
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tca_free_gait::stand;
+
+    /// The Ambler standing on flat ground at (5, 0), and its step source.
+    fn ambler_on_flat() -> (CgSteps, GaitState) {
+        let model = Arc::new(RobotModel::builtin("ambler").expect("the Ambler"));
+        let terrain = Arc::new(
+            HeightField::flat(Point2::new(0.0, -8.0), Point2::new(20.0, 8.0), 0.1, 0.0)
+                .expect("flat ground"),
+        );
+        let gait = GaitParams::for_model(&model);
+        let state = stand(&model, &GridView::new(terrain.clone()), 5.0, 0.0, 0.0)
+            .expect("the Ambler stands");
+        let steps = CgSteps::new(
+            model,
+            terrain,
+            walking_cg_params(),
+            PlanParams::default(),
+            gait,
+        )
+        .expect("a step source");
+        (steps, state)
+    }
+
+    /// The place the executor starts from, as it keys it.
+    fn start_of(grid: &CgGrid, state: &GaitState) -> (CgCell, Stance) {
+        let t = state.body.translation;
+        let cell = grid
+            .cell_of(Point2::new(t.x, t.y), 0.0)
+            .expect("on the map");
+        let feet = state
+            .legs
+            .iter()
+            .map(|l| Some(grid.xy_of(Point2::new(l.foot.x, l.foot.y))))
+            .collect();
+        (cell, Stance::new(0, feet, millimetres(t.z)))
+    }
+
+    #[test]
+    fn a_move_checked_again_is_answered_from_memory_with_the_same_state() {
+        let (steps, state) = ambler_on_flat();
+        let grid = *steps.space.lock().expect("the space").grid();
+        let executor = Executor::new(&steps, &grid, &state);
+        let (cell, from) = start_of(&grid, &state);
+        // The body's move one cell ahead, at its height.
+        let next = CgCell::new(cell.ix + 1, cell.iy, cell.it);
+        let advance = FootStep::Advance {
+            to: next,
+            body_z: from.body_z(),
+        };
+        let mut to = from.clone();
+        apply_step(&mut to, &advance);
+        assert!(executor.check(&from, cell, &advance, &to, next));
+        assert_eq!(executor.checked.get(), 1);
+        let first = executor.states.borrow()[&(next, to.clone())].clone();
+        assert!(executor.check(&from, cell, &advance, &to, next));
+        assert_eq!(executor.checked.get(), 1, "carried out a second time");
+        let again = executor.states.borrow()[&(next, to.clone())].clone();
+        assert_eq!(first.1, again.1, "the same state, the same generation");
+        assert_eq!(first.0.0.body, again.0.0.body);
+        // A foot sent 12 m away cannot get there; the refusal is remembered too.
+        let far = (cell.ix + 40, cell.iy);
+        let swing = FootStep::Place {
+            leg: 0,
+            from: from.feet[0],
+            to: far,
+        };
+        let mut moved = from.clone();
+        apply_step(&mut moved, &swing);
+        assert!(!executor.check(&from, cell, &swing, &moved, cell));
+        assert!(!executor.check(&from, cell, &swing, &moved, cell));
+        assert_eq!(executor.checked.get(), 2);
+        assert_eq!(executor.refused.get(), 1);
+    }
+
+    #[test]
+    fn a_state_reached_again_by_another_way_is_checked_anew_from_there() {
+        let (steps, state) = ambler_on_flat();
+        let grid = *steps.space.lock().expect("the space").grid();
+        let executor = Executor::new(&steps, &grid, &state);
+        let (cell, from) = start_of(&grid, &state);
+        let next = CgCell::new(cell.ix + 1, cell.iy, cell.it);
+        let advance = FootStep::Advance {
+            to: next,
+            body_z: from.body_z(),
+        };
+        let mut to = from.clone();
+        apply_step(&mut to, &advance);
+        assert!(executor.check(&from, cell, &advance, &to, next));
+        let back = FootStep::Advance {
+            to: cell,
+            body_z: from.body_z(),
+        };
+        let mut home = to.clone();
+        apply_step(&mut home, &back);
+        let before = executor.checked.get();
+        let outcome = executor.check(&to, next, &back, &home, cell);
+        assert_eq!(executor.checked.get(), before + 1);
+        // The same place reached again by another move: a new generation there, so the
+        // move from it is carried out again rather than answered for the old state, and
+        // then answered from memory for the new one.
+        {
+            let mut states = executor.states.borrow_mut();
+            let entry = states.get_mut(&(next, to.clone())).expect("reached");
+            entry.1 += 100;
+        }
+        assert_eq!(executor.check(&to, next, &back, &home, cell), outcome);
+        assert_eq!(executor.checked.get(), before + 2);
+        assert_eq!(executor.check(&to, next, &back, &home, cell), outcome);
+        assert_eq!(executor.checked.get(), before + 2);
     }
 }

@@ -5,7 +5,7 @@ use crate::common;
 use std::time::{Duration, Instant};
 
 use nalgebra::Point2;
-use tca_cg_space::{CgError, CgParams, CgSpace, FootStep, PlanParams, Verdict, plan};
+use tca_cg_space::{CgError, CgParams, CgSpace, FootStep, Plan, PlanParams, Verdict, plan};
 use tca_legged_model::RobotModel;
 
 fn ambler_space(terrain: &tca_robot::HeightField) -> CgSpace {
@@ -46,8 +46,16 @@ fn flat_ground_is_valid_and_a_plan_keeps_every_stance_standing() {
             .any(|s| matches!(s, FootStep::Place { .. })),
         "the feet must move to go 5 m"
     );
-    // Check each stance independently: at least three feet down, the CG inside them, each
-    // foot within its leg's range (the body-frame map) at a common body height.
+    assert_every_stance_stands(&space, &p, true);
+}
+
+/// Checks each stance of a plan independently: at least three feet down, each foot within
+/// its leg's range (the body-frame map) at a common body height, and with `neutral_com` the
+/// CG of the neutral posture inside the feet (the search holds the CG of the legs as posed,
+/// which the neutral one matches only while the legs stay near neutral, as on flat ground).
+fn assert_every_stance_stands(space: &CgSpace, p: &Plan, neutral_com: bool) {
+    let route = &p.feet.route;
+    let grid = *space.grid();
     let robot = space.robot().clone();
     for s in p.feet.stances() {
         let c = route[s.k];
@@ -61,11 +69,15 @@ fn flat_ground_is_valid_and_a_plan_keeps_every_stance_standing() {
             .collect();
         assert!(down.len() >= 3);
         let poly = tca_stability::support_polygon(&down);
-        assert!(
-            poly.signed_distance(centre + robot.com.coords) > 0.0,
-            "CG outside the feet at {c:?}"
-        );
         let (s_, c_) = theta.sin_cos();
+        // The centre of mass, body frame to world.
+        let com = robot.com;
+        let com = centre + nalgebra::Vector2::new(c_ * com.x - s_ * com.y, s_ * com.x + c_ * com.y);
+        assert!(
+            !neutral_com || poly.signed_distance(com) > 0.0,
+            "CG outside the feet at {c:?}: {:.3} m",
+            poly.signed_distance(com)
+        );
         let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
         for (leg, f) in s.feet.iter().enumerate() {
             let Some(f) = f else { continue };
@@ -198,6 +210,65 @@ fn cliff_is_invalid_and_the_route_takes_the_ramp() {
             assert!(foot.valid(f.0, f.1), "a foot on the cliff face at {f:?}");
         }
     }
+}
+
+#[test]
+fn after_backing_off_from_where_the_search_stuck_the_plan_still_holds_together() {
+    // The cliff course with the feedback backing off four cells from where a search got
+    // stuck: the steps kept before the back-off and those searched after it make one plan
+    // whose every stance stands, along one unbroken route that takes the ramp.
+    let t = tca_legged_courses::Course::builtin("cliff", 1)
+        .expect("the cliff course")
+        .terrain;
+    // One heading bin, as walks plan: the robot keeps facing +X.
+    let model = RobotModel::builtin("ambler").expect("the Ambler");
+    let cg = CgParams {
+        theta_bins: Some(1),
+        ..CgParams::default()
+    };
+    let mut space = CgSpace::for_model(&model, &t, cg).expect("a CG-space");
+    let grid = *space.grid();
+    let params = PlanParams {
+        backoff_cells: 4,
+        ..PlanParams::default()
+    };
+    let p = plan(
+        &mut space,
+        (Point2::new(4.0, 0.0), 0.0),
+        (Point2::new(24.0, 0.0), 0.0),
+        None,
+        &params,
+    )
+    .expect("a plan by the ramp");
+    assert!(p.routes > 1, "the feedback never ran: {} route", p.routes);
+    let route = &p.feet.route;
+    assert!(
+        route
+            .windows(2)
+            .all(|w| grid.steps_between(w[0], w[1]) == 1),
+        "the route is broken"
+    );
+    assert_eq!(
+        route.first(),
+        grid.cell_of(Point2::new(4.0, 0.0), 0.0).as_ref()
+    );
+    assert_eq!(
+        route.last(),
+        grid.cell_of(Point2::new(24.0, 0.0), 0.0).as_ref()
+    );
+    let stances = p.feet.stances();
+    assert_eq!(stances.last().map(|s| s.k), Some(route.len() - 1));
+    // Where the route crosses the cliff's line (x = 14 m), it is beside the ramp.
+    for w in route.windows(2) {
+        let (a, b) = (grid.centre(w[0].ix, w[0].iy), grid.centre(w[1].ix, w[1].iy));
+        if (a.x < 14.0) != (b.x < 14.0) {
+            assert!(
+                a.y > 2.0 && b.y > 2.0,
+                "the route crosses the cliff from {a:?} to {b:?}"
+            );
+        }
+    }
+    assert_every_stance_stands(&space, &p, false);
 }
 
 #[test]
