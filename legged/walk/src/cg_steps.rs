@@ -444,7 +444,12 @@ impl MoveCheck for Executor<'_> {
         to_cell: CgCell,
     ) -> bool {
         let start = (from_cell, from.clone());
-        let Some(((state, _), generation)) = self.states.borrow().get(&start).cloned() else {
+        let Some((state, generation)) = self
+            .states
+            .borrow()
+            .get(&start)
+            .map(|((state, _), generation)| (state.clone(), *generation))
+        else {
             return false;
         };
         let end = (to_cell, to.clone());
@@ -535,6 +540,17 @@ mod tests {
         (cell, Stance::new(0, feet, millimetres(t.z)))
     }
 
+    /// The body's move from `from` to `cell` at its height, and the stance it leads to.
+    fn advance_to(from: &Stance, cell: CgCell) -> (FootStep, Stance) {
+        let step = FootStep::Advance {
+            to: cell,
+            body_z: from.body_z(),
+        };
+        let mut to = from.clone();
+        apply_step(&mut to, &step);
+        (step, to)
+    }
+
     #[test]
     fn a_move_checked_again_is_answered_from_memory_with_the_same_state() {
         let (steps, state) = ambler_on_flat();
@@ -543,12 +559,7 @@ mod tests {
         let (cell, from) = start_of(&grid, &state);
         // The body's move one cell ahead, at its height.
         let next = CgCell::new(cell.ix + 1, cell.iy, cell.it);
-        let advance = FootStep::Advance {
-            to: next,
-            body_z: from.body_z(),
-        };
-        let mut to = from.clone();
-        apply_step(&mut to, &advance);
+        let (advance, to) = advance_to(&from, next);
         assert!(executor.check(&from, cell, &advance, &to, next));
         assert_eq!(executor.checked.get(), 1);
         let first = executor.states.borrow()[&(next, to.clone())].clone();
@@ -579,19 +590,9 @@ mod tests {
         let executor = Executor::new(&steps, &grid, &state);
         let (cell, from) = start_of(&grid, &state);
         let next = CgCell::new(cell.ix + 1, cell.iy, cell.it);
-        let advance = FootStep::Advance {
-            to: next,
-            body_z: from.body_z(),
-        };
-        let mut to = from.clone();
-        apply_step(&mut to, &advance);
+        let (advance, to) = advance_to(&from, next);
         assert!(executor.check(&from, cell, &advance, &to, next));
-        let back = FootStep::Advance {
-            to: cell,
-            body_z: from.body_z(),
-        };
-        let mut home = to.clone();
-        apply_step(&mut home, &back);
+        let (back, home) = advance_to(&to, cell);
         let before = executor.checked.get();
         let outcome = executor.check(&to, next, &back, &home, cell);
         assert_eq!(executor.checked.get(), before + 1);
