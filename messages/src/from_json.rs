@@ -203,7 +203,8 @@ impl Reader<'_> {
                 if x.is_finite() && (x as f32).is_infinite() {
                     return Err(mismatch(path, format!("{x} does not fit in an f32")));
                 }
-                Value::Float(x)
+                // As the wire's f32 decodes: the single-precision value, shown as written.
+                Value::Float(crate::value::f32_as_decimal(x as f32))
             }
             Shape::F64 => Value::Float(float(json, "f64", path)?),
             Shape::Char => match json.as_str().map(|s| {

@@ -178,7 +178,7 @@ impl Decoder<'_> {
             Shape::I128 => signed(self, 19)?,
             Shape::F32 => {
                 let b = self.take(4, path)?;
-                Value::Float(f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+                Value::Float(f32_as_decimal(f32::from_le_bytes([b[0], b[1], b[2], b[3]])))
             }
             Shape::F64 => {
                 let b = self.take(8, path)?;
@@ -318,6 +318,21 @@ impl Decoder<'_> {
             }
         })
     }
+}
+
+/// An `f32` as the `f64` nearest its shortest decimal form (`0.1f32` gives `0.1`, not
+/// `0.10000000149011612`), so that JSON and text show the number the sender wrote. Converting
+/// the result back to `f32` gives the same bits for every finite value; non-finite values
+/// are kept as they are.
+pub fn f32_as_decimal(x: f32) -> f64 {
+    if !x.is_finite() {
+        return f64::from(x);
+    }
+    let mut buffer = ryu::Buffer::new();
+    buffer
+        .format_finite(x)
+        .parse::<f64>()
+        .unwrap_or_else(|_| f64::from(x))
 }
 
 impl fmt::Display for Value {
@@ -536,6 +551,17 @@ mod tests {
 
     proptest! {
         #[test]
+        fn an_f32_shown_as_decimal_converts_back_to_the_same_bits(bits in any::<u32>()) {
+            let x = f32::from_bits(bits);
+            let shown = f32_as_decimal(x);
+            if x.is_nan() {
+                prop_assert!(shown.is_nan());
+            } else {
+                prop_assert_eq!((shown as f32).to_bits(), x.to_bits());
+            }
+        }
+
+        #[test]
         fn dynamic_decoding_matches_the_typed_value(s in sample()) {
             let format = DataFormat::of::<Sample>().unwrap();
             let bytes = postcard::to_allocvec(&s).unwrap();
@@ -566,6 +592,18 @@ mod tests {
         let bytes = postcard::to_allocvec(&Kind::Named { x: 1.5, flag: true }).unwrap();
         let v = format.decode_value(&bytes).unwrap();
         assert_eq!(v.to_string(), "Named { x: 1.5, flag: true }");
+    }
+
+    #[test]
+    fn single_precision_floats_show_as_written() {
+        let format = DataFormat::of::<Vec<f32>>().unwrap();
+        let bytes = postcard::to_allocvec(&vec![0.1f32, -2.7, 1e-7, f32::NAN]).unwrap();
+        let v = format.decode_value(&bytes).unwrap();
+        assert_eq!(v.to_string(), "[0.1, -2.7, 0.0000001, NaN]");
+        assert_eq!(
+            serde_json::to_string(&v.to_json()).unwrap(),
+            r#"[0.1,-2.7,1e-7,"NaN"]"#
+        );
     }
 
     #[test]
