@@ -258,7 +258,9 @@ impl FootSearch<'_> {
         let Some(high) = raised(target) else {
             return false;
         };
-        let others = |parts: &LegParts| self.clear_of_others(leg, parts, s, poses, 0);
+        let others = |parts: &LegParts| {
+            self.over_map(&body, parts) && self.clear_of_others(leg, parts, s, poses, 0)
+        };
         if !others(&down.parts) || !others(&high.parts) {
             return false;
         }
@@ -284,6 +286,20 @@ impl FootSearch<'_> {
         })
     }
 
+    /// Whether a swinging leg's links (`parts`, the body at `body`) pass over mapped ground:
+    /// each capsule, widened by its radius again and a cell (the box it fills and the
+    /// ground around it that a check of its surface looks at), within the map. Ground off
+    /// the map is unknown, and a leg never swings over unknown ground.
+    fn over_map(&self, body: &BodyPose, parts: &LegParts) -> bool {
+        let grid = self.space.grid();
+        parts.capsules().all(|(a, b, r)| {
+            let margin = 2.0 * r + grid.cell_m;
+            [a, b]
+                .into_iter()
+                .all(|p| grid.holds_within(body.to_world_xy(p), margin))
+        })
+    }
+
     /// Whether the foot of a standing leg can be lifted and held up: raised within its
     /// reach, the others holding the centre of mass.
     pub(crate) fn lift_ok(&self, s: &Stance, poses: &[Rc<LegPose>], leg: usize) -> bool {
@@ -296,7 +312,8 @@ impl FootSearch<'_> {
                     .at(leg, body.to_body(Point3::new(c.x, c.y, c.z + lift)))
             })
             .is_some_and(|up| {
-                self.held(&body, &s.feet, Some(leg), poses, Some((leg, &up.parts)))
+                self.over_map(&body, &up.parts)
+                    && self.held(&body, &s.feet, Some(leg), poses, Some((leg, &up.parts)))
                     && self.clear_of_others(leg, &up.parts, s, poses, 0)
             });
         self.note(ok)

@@ -100,6 +100,18 @@ impl CgGrid {
         )
     }
 
+    /// Whether the square of half-side `margin_m` about a world point lies on the grid.
+    pub fn holds_within(&self, p: Point2<f64>, margin_m: f64) -> bool {
+        let hi = Point2::new(
+            self.origin.x + f64::from(self.nx) * self.cell_m,
+            self.origin.y + f64::from(self.ny) * self.cell_m,
+        );
+        p.x - margin_m >= self.origin.x
+            && p.y - margin_m >= self.origin.y
+            && p.x + margin_m <= hi.x
+            && p.y + margin_m <= hi.y
+    }
+
     /// The heading of bin `it`, radians in `[0, 2π)`.
     pub fn theta(&self, it: u16) -> f64 {
         f64::from(it) * TAU / f64::from(self.theta_bins)

@@ -35,6 +35,12 @@ pub struct PlanParams {
     /// new way. 0 goes on from the furthest stance itself.
     #[serde(default)]
     pub backoff_cells: usize,
+    /// How near the goal the CG must come, metres: 0 asks for the goal's own cell. Above 0,
+    /// a search that sticks once the CG stands on a route cell whose centre is this near the
+    /// goal has arrived: the plan ends there (its moves put to the outside check first)
+    /// instead of marking cells round the goal and replanning.
+    #[serde(default)]
+    pub goal_tolerance_m: f64,
 }
 
 impl Default for PlanParams {
@@ -45,6 +51,7 @@ impl Default for PlanParams {
             max_replans: 60,
             mark_radius: 2,
             backoff_cells: 0,
+            goal_tolerance_m: 0.0,
         }
     }
 }
@@ -260,6 +267,34 @@ pub fn plan_with(
                 });
             }
             Err(Failed::Stuck(fail)) => {
+                if let Some((end, mut near)) =
+                    arrival_near_goal(space, &route, goal.0, params, &from, &fail, check)
+                {
+                    tracing::debug!(
+                        end,
+                        route_len = route.len(),
+                        "foot search stuck within the goal's tolerance; the plan ends there"
+                    );
+                    let mut steps = kept.clone();
+                    steps.append(&mut near);
+                    let initial_stance = initial.clone().unwrap_or(first);
+                    route.truncate(end + 1);
+                    return Ok(Plan {
+                        feet: FootPlan {
+                            route,
+                            start: Stance {
+                                k: 0,
+                                ..initial_stance
+                            },
+                            steps,
+                            nodes: fail.nodes,
+                        },
+                        first_route,
+                        marked,
+                        routes,
+                        counts,
+                    });
+                }
                 if marked.len() >= params.max_replans {
                     return Err(CgError::NoFootfalls {
                         replans: marked.len(),
@@ -399,6 +434,53 @@ enum Failed {
 
 /// Searches from `from`, and puts each plan found to `check` move by move; at the first move
 /// it refuses, forbids that move from its stance and searches again.
+/// Where a stuck search already stood within the goal's tolerance: the last route cell it
+/// reached whose centre is within `params.goal_tolerance_m` of `goal`, and the steps from
+/// `from` to the first stance on that cell, provided `check` accepts each of them. `None`
+/// when the tolerance is 0, no such cell was reached, or a step is refused.
+fn arrival_near_goal(
+    space: &CgSpace,
+    route: &[CgCell],
+    goal: Point2<f64>,
+    params: &PlanParams,
+    from: &Stance,
+    fail: &SearchFailure,
+    check: Option<&dyn MoveCheck>,
+) -> Option<(usize, Vec<FootStep>)> {
+    let tolerance = params.goal_tolerance_m;
+    if !(tolerance > 0.0) {
+        return None;
+    }
+    let grid = space.grid();
+    let near = |k: usize| {
+        let c = route[k];
+        (grid.centre(c.ix, c.iy) - goal).norm() <= tolerance
+    };
+    // The furthest route cell within the tolerance and the steps that first reach it.
+    let mut best = near(from.k).then_some((from.k, 0));
+    let mut at = from.clone();
+    for (n, step) in fail.steps_to_furthest.iter().enumerate() {
+        apply(&mut at, step);
+        if at.k > best.map_or(from.k, |(k, _)| k) && near(at.k) {
+            best = Some((at.k, n + 1));
+        }
+    }
+    let (end, n) = best?;
+    let steps = fail.steps_to_furthest[..n].to_vec();
+    if let Some(check) = check {
+        let mut at = from.clone();
+        for step in &steps {
+            let mut next = at.clone();
+            apply(&mut next, step);
+            if !check.check(&at, route[at.k], step, &next, route[next.k]) {
+                return None;
+            }
+            at = next;
+        }
+    }
+    Some((end, steps))
+}
+
 fn search_checked(
     search: &mut FootSearch<'_>,
     from: &Stance,

@@ -167,13 +167,16 @@ impl CgSteps {
     }
 
     /// The next step from `state` toward `goal`: the plan's next one if the robot stands
-    /// where it starts, otherwise the first of a new plan from where it stands. `Ok(None)`
-    /// when the plan has no step left (the CG is in the goal's cell). A plan's joins on
-    /// workers are asked through `asker` (the planning handler's module).
+    /// where it starts, otherwise the first of a new plan from where it stands. A plan ends
+    /// in the goal's cell, or, where the foot search cannot get there, on the route cell it
+    /// reached whose centre is within `tolerance_m` of the goal (the walk's own test of
+    /// arrival). `Ok(None)` when the plan has no step left. A plan's joins on workers are
+    /// asked through `asker` (the planning handler's module).
     pub fn next_step(
         &self,
         state: &GaitState,
         goal: Point2<f64>,
+        tolerance_m: f64,
         asker: Module,
     ) -> Result<Option<CgNext>, String> {
         let mut queue = self.queue.lock().unwrap_or_else(|p| p.into_inner());
@@ -192,7 +195,13 @@ impl CgSteps {
         let grid = *space.grid();
         let executor = Executor::new(self, &grid, state);
         let found = match &self.joiner {
-            None => self.plan_from(&mut space, state, goal, &executor, &mut LocalRoutes)?,
+            None => self.plan_from(
+                &mut space,
+                state,
+                (goal, tolerance_m),
+                &executor,
+                &mut LocalRoutes,
+            )?,
             Some(joiner) => {
                 let mut joiner = joiner.lock().unwrap_or_else(|p| p.into_inner());
                 joiner.ask_as(asker);
@@ -200,7 +209,13 @@ impl CgSteps {
                     joiner: &mut *joiner,
                     batch: BatchParams::default(),
                 };
-                self.plan_from(&mut space, state, goal, &executor, &mut routes)?
+                self.plan_from(
+                    &mut space,
+                    state,
+                    (goal, tolerance_m),
+                    &executor,
+                    &mut routes,
+                )?
             }
         };
         tracing::debug!(
@@ -231,12 +246,13 @@ impl CgSteps {
             .cell_m
     }
 
-    /// A CG-space plan from the robot's state to `goal`, heading kept.
+    /// A CG-space plan from the robot's state to `goal` (a point and the tolerance of
+    /// arrival), heading kept.
     fn plan_from(
         &self,
         space: &mut CgSpace,
         state: &GaitState,
-        goal: Point2<f64>,
+        (goal, tolerance_m): (Point2<f64>, f64),
         executor: &Executor<'_>,
         routes: &mut dyn RoutePlanner,
     ) -> Result<Plan, String> {
@@ -255,12 +271,18 @@ impl CgSteps {
                 .collect(),
             body_z: t.z,
         };
+        // The plan may end on a cell this near the goal; a millimetre less than the walk's
+        // tolerance, so that the walk agrees the robot has arrived.
+        let params = PlanParams {
+            goal_tolerance_m: (tolerance_m - 1e-3).max(0.0),
+            ..self.params.clone()
+        };
         plan_with(
             space,
             (Point2::new(t.x, t.y), yaw),
             (goal, yaw),
             Some(&standing),
-            &self.params,
+            &params,
             Some(executor),
             routes,
         )
@@ -505,7 +527,8 @@ mod tests {
     use super::*;
     use tca_free_gait::stand;
 
-    /// The Ambler standing on flat ground at (5, 0), and its step source.
+    /// The Ambler standing at (5, 0) on flat ground 20 m by 16 m (x 0..20, y -8..8), and
+    /// its step source.
     fn ambler_on_flat() -> (CgSteps, GaitState) {
         let model = Arc::new(RobotModel::builtin("ambler").expect("the Ambler"));
         let terrain = Arc::new(
@@ -608,5 +631,28 @@ mod tests {
         assert_eq!(executor.checked.get(), before + 2);
         assert_eq!(executor.check(&to, next, &back, &home, cell), outcome);
         assert_eq!(executor.checked.get(), before + 2);
+    }
+
+    #[test]
+    fn a_plan_near_the_maps_edge_swings_no_leg_over_unknown_ground() {
+        // The goal 4 m inside the north edge: the Ambler's left legs, reaching 4 m and more
+        // from its body, would swing over ground off the map, which the robot's own check
+        // refuses (a planner that let them offered 142 such moves on the way).
+        let (steps, state) = ambler_on_flat();
+        let goal = Point2::new(9.0, 4.0);
+        let mut space = steps.space.lock().expect("the space");
+        let grid = *space.grid();
+        let executor = Executor::new(&steps, &grid, &state);
+        let plan = steps
+            .plan_from(&mut space, &state, (goal, 0.0), &executor, &mut LocalRoutes)
+            .expect("a plan to 4 m from the edge");
+        let end = plan.feet.route.last().expect("a route");
+        assert!((grid.centre(end.ix, end.iy) - goal).norm() < grid.cell_m);
+        assert!(executor.checked.get() > 0);
+        assert_eq!(
+            executor.refused.get(),
+            0,
+            "the planner offered moves the robot refuses"
+        );
     }
 }

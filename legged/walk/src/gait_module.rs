@@ -644,9 +644,12 @@ impl Shared {
         // Joins on workers are asked as this handler's own queries (see
         // `DistributedJoiner::ask_as`).
         let asker = ctx.module().clone();
-        let next = tokio::task::spawn_blocking(move || cg.next_step(&planning_state, goal, asker))
-            .await
-            .map_err(|e| HandlerError::new(format!("the planning task ended abnormally: {e}")))?;
+        let tolerance_m = step.tolerance_m;
+        let next = tokio::task::spawn_blocking(move || {
+            cg.next_step(&planning_state, goal, tolerance_m, asker)
+        })
+        .await
+        .map_err(|e| HandlerError::new(format!("the planning task ended abnormally: {e}")))?;
         let elapsed = began.elapsed();
         if ctx.simulated_time() {
             ctx.spend(ComputeTime::Measured.charged(elapsed));

@@ -300,3 +300,51 @@ fn walled_goal_is_reported_unreachable_quickly() {
     );
     assert!(began.elapsed() < Duration::from_secs(60));
 }
+
+#[test]
+fn a_search_stuck_within_the_goals_tolerance_has_arrived() {
+    // The cliff course with no replans allowed: the first foot search sticks before the
+    // goal. Asking for the goal's own cell, that is the end of planning; with a tolerance
+    // that takes in every cell the search reached, the plan ends on the furthest of them,
+    // and it holds together as any plan does.
+    let t = tca_legged_courses::Course::builtin("cliff", 1)
+        .expect("the cliff course")
+        .terrain;
+    let model = RobotModel::builtin("ambler").expect("the Ambler");
+    let cg = CgParams {
+        theta_bins: Some(1),
+        ..CgParams::default()
+    };
+    let mut space = CgSpace::for_model(&model, &t, cg).expect("a CG-space");
+    let grid = *space.grid();
+    let (start, goal) = (Point2::new(4.0, 0.0), Point2::new(24.0, 0.0));
+    let exact = PlanParams {
+        max_replans: 0,
+        ..PlanParams::default()
+    };
+    let r = plan(&mut space, (start, 0.0), (goal, 0.0), None, &exact);
+    assert!(
+        matches!(r, Err(CgError::NoFootfalls { replans: 0, .. })),
+        "the first search should stick on this course: {r:?}"
+    );
+    let tolerant = PlanParams {
+        goal_tolerance_m: 100.0,
+        ..exact
+    };
+    let p = plan(&mut space, (start, 0.0), (goal, 0.0), None, &tolerant)
+        .expect("a plan that ends where the search stuck");
+    assert_eq!(p.routes, 1, "no replan");
+    assert!(p.marked.is_empty(), "no cell marked: {:?}", p.marked);
+    let route = &p.feet.route;
+    assert!(
+        route.len() < p.first_route.cells.len(),
+        "the plan ends before the route does"
+    );
+    assert_eq!(route[..], p.first_route.cells[..route.len()]);
+    let stances = p.feet.stances();
+    assert_eq!(stances.last().map(|s| s.k), Some(route.len() - 1));
+    let end = route.last().expect("a route");
+    let at = grid.centre(end.ix, end.iy);
+    assert!(at.x > start.x + 1.0, "the walk got somewhere: {at:?}");
+    assert_every_stance_stands(&space, &p, false);
+}
