@@ -22,7 +22,10 @@ pub struct PlanParams {
     pub route: RouteParams,
     /// The foot-level search.
     pub search: SearchParams,
-    /// Routes replanned after the search failed before the planner gives up.
+    /// Routes replanned after a search that got no nearer the goal than an earlier one
+    /// before the planner gives up. A search that sticks nearer the goal (in cell steps
+    /// from the furthest cell it reached) than any before it is progress and does not
+    /// count, but no plan replans more than four times this in all.
     pub max_replans: usize,
     /// Cells around a cell the search cannot get past that are marked with it (same
     /// heading, within this many cells in x and y): 0 marks the cell alone, as the paper's
@@ -220,6 +223,10 @@ pub fn plan_with(
     let mut widen = params.mark_radius > 0;
     let initial = stance.clone();
     let mut first_stance: Option<Stance> = initial.clone();
+    // The fewest cell steps to the goal from where a stuck search got, and the stuck
+    // searches that got no nearer than that.
+    let mut nearest = i32::MAX;
+    let mut futile = 0usize;
     loop {
         let mut search = FootSearch::new(space, &route, params.search.clone());
         if let Some(st) = standing {
@@ -295,7 +302,15 @@ pub fn plan_with(
                         counts,
                     });
                 }
-                if marked.len() >= params.max_replans {
+                let left = grid.steps_between(route[fail.furthest], g);
+                if left < nearest {
+                    nearest = left;
+                } else {
+                    futile += 1;
+                }
+                if futile >= params.max_replans
+                    || marked.len() >= params.max_replans.saturating_mul(4)
+                {
                     return Err(CgError::NoFootfalls {
                         replans: marked.len(),
                         detail: format!(
@@ -358,6 +373,10 @@ pub fn plan_with(
                 // Keep the steps up to the stance that reached the route cell `keep` (the
                 // furthest, less the back-off, but not before where this search started),
                 // and plan the rest of the route from there.
+                // A stuck search's steps were never put to the outside check (only whole
+                // plans are): the kept ones are put to it here, in order, and the prefix
+                // ends before the first it refuses, so the next search starts from a stance
+                // the check has seen the robot reach.
                 let keep = fail
                     .furthest
                     .saturating_sub(params.backoff_cells)
@@ -368,9 +387,17 @@ pub fn plan_with(
                     if reached.k >= keep {
                         break;
                     }
-                    apply(&mut reached, st);
+                    let mut next = reached.clone();
+                    apply(&mut next, st);
+                    if let Some(check) = check
+                        && !check.check(&reached, route[reached.k], st, &next, route[next.k])
+                    {
+                        break;
+                    }
+                    reached = next;
                     prefix.push(*st);
                 }
+                let keep = reached.k;
                 let here = route[keep];
                 let rest = routes_from.route(space, here, g, &params.route);
                 routes += 1;
@@ -448,7 +475,8 @@ fn arrival_near_goal(
     check: Option<&dyn MoveCheck>,
 ) -> Option<(usize, Vec<FootStep>)> {
     let tolerance = params.goal_tolerance_m;
-    if !(tolerance > 0.0) {
+    // Also refuses a NaN tolerance.
+    if tolerance.is_nan() || tolerance <= 0.0 {
         return None;
     }
     let grid = space.grid();

@@ -5,7 +5,10 @@ use crate::common;
 use std::time::{Duration, Instant};
 
 use nalgebra::Point2;
-use tca_cg_space::{CgError, CgParams, CgSpace, FootStep, Plan, PlanParams, Verdict, plan};
+use tca_cg_space::{
+    CgCell, CgError, CgParams, CgSpace, FootStep, MoveCheck, Plan, PlanParams, Stance, Verdict,
+    apply_step, plan, plan_checked,
+};
 use tca_legged_model::RobotModel;
 
 fn ambler_space(terrain: &tca_robot::HeightField) -> CgSpace {
@@ -347,4 +350,96 @@ fn a_search_stuck_within_the_goals_tolerance_has_arrived() {
     let at = grid.centre(end.ix, end.iy);
     assert!(at.x > start.x + 1.0, "the walk got somewhere: {at:?}");
     assert_every_stance_stands(&space, &p, false);
+}
+
+#[test]
+fn searches_that_stick_nearer_the_goal_do_not_use_up_the_replans() {
+    // On the cliff course the plan marks three cells; one of those searches got no nearer
+    // the goal than the one before it. A budget of two such searches is enough (the others
+    // made progress), a budget of one is not.
+    let t = tca_legged_courses::Course::builtin("cliff", 1)
+        .expect("the cliff course")
+        .terrain;
+    let model = RobotModel::builtin("ambler").expect("the Ambler");
+    let cg = CgParams {
+        theta_bins: Some(1),
+        ..CgParams::default()
+    };
+    let attempt = |max_replans: usize| {
+        let mut space = CgSpace::for_model(&model, &t, cg.clone()).expect("a CG-space");
+        let params = PlanParams {
+            backoff_cells: 4,
+            max_replans,
+            ..PlanParams::default()
+        };
+        plan(
+            &mut space,
+            (Point2::new(4.0, 0.0), 0.0),
+            (Point2::new(24.0, 0.0), 0.0),
+            None,
+            &params,
+        )
+    };
+    let p = attempt(2).expect("a plan with two searches that got no nearer allowed");
+    assert!(p.marked.len() > 2, "only {} cells marked", p.marked.len());
+    match attempt(1) {
+        Err(CgError::NoFootfalls { replans, .. }) => assert!(replans < p.marked.len()),
+        other => panic!("one search that got no nearer allowed: {other:?}"),
+    }
+}
+
+/// A check that lets every move through and remembers each it was asked about.
+#[derive(Default)]
+struct Recorder {
+    asked: std::cell::RefCell<std::collections::HashSet<(Stance, Stance)>>,
+}
+
+impl MoveCheck for Recorder {
+    fn check(&self, from: &Stance, _: CgCell, _: &FootStep, to: &Stance, _: CgCell) -> bool {
+        self.asked.borrow_mut().insert((from.clone(), to.clone()));
+        true
+    }
+}
+
+#[test]
+fn every_move_of_a_replanned_plan_was_put_to_the_check() {
+    // With the feedback backing off after a stuck search, the steps kept from that search
+    // are part of the plan: the outside check must have seen each of them, as it has seen
+    // the moves of the searches that succeeded.
+    let t = tca_legged_courses::Course::builtin("cliff", 1)
+        .expect("the cliff course")
+        .terrain;
+    let model = RobotModel::builtin("ambler").expect("the Ambler");
+    let cg = CgParams {
+        theta_bins: Some(1),
+        ..CgParams::default()
+    };
+    let mut space = CgSpace::for_model(&model, &t, cg).expect("a CG-space");
+    let params = PlanParams {
+        backoff_cells: 4,
+        ..PlanParams::default()
+    };
+    let check = Recorder::default();
+    let p = plan_checked(
+        &mut space,
+        (Point2::new(4.0, 0.0), 0.0),
+        (Point2::new(24.0, 0.0), 0.0),
+        None,
+        &params,
+        Some(&check),
+    )
+    .expect("a plan by the ramp");
+    assert!(!p.marked.is_empty(), "the feedback never ran");
+    let asked = check.asked.borrow();
+    let mut at = p.feet.start.clone();
+    for (i, step) in p.feet.steps.iter().enumerate() {
+        let mut next = at.clone();
+        apply_step(&mut next, step);
+        assert!(
+            asked.contains(&(at.clone(), next.clone())),
+            "move {i} of {} ({step:?}) was never checked",
+            p.feet.steps.len()
+        );
+        at = next;
+    }
 }
