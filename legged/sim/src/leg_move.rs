@@ -264,6 +264,7 @@ impl LeggedSim {
                     let at = body
                         * l.foot_position(&q_real)
                             .unwrap_or_else(|_| nalgebra::Point3::origin());
+                    tracing::debug!(drag_m = real.drag_m, ?at, "a loaded foot moved sideways");
                     let hits = vec![(l.foot_link().to_owned(), at)];
                     return Err(self.stop_on_collision(report, i, reached, hits));
                 }
@@ -306,6 +307,12 @@ impl LeggedSim {
                     let at = body
                         * l.foot_position(&q_real)
                             .unwrap_or_else(|_| nalgebra::Point3::origin());
+                    tracing::debug!(
+                        clearance,
+                        segment = k,
+                        ?at,
+                        "a swinging foot went into the ground"
+                    );
                     let hits = vec![(l.foot_link().to_owned(), at)];
                     return Err(self.stop_on_collision(report, i, reached, hits));
                 }
@@ -398,7 +405,7 @@ impl LeggedSim {
             .into_iter()
             .next()
             .unwrap_or_else(|| (String::new(), nalgebra::Point3::origin()));
-        tracing::debug!(%link, "collision with the terrain");
+        tracing::debug!(%link, ?at, "collision with the terrain");
         MoveError::Collision {
             command: CMD,
             leg: Some(self.model.legs()[i].name().to_owned()),

@@ -73,7 +73,15 @@ pub struct CgSteps {
     params: PlanParams,
     lift_m: f64,
     /// The plan's steps still to come, each with the state it starts from.
-    queue: Mutex<VecDeque<(GaitState, StepPlan)>>,
+    queue: Mutex<VecDeque<Queued>>,
+}
+
+/// A planned step: the state it was planned from, the step, and its foot-level moves.
+#[derive(Debug, Clone)]
+struct Queued {
+    start: GaitState,
+    step: StepPlan,
+    moves: Vec<FootStep>,
 }
 
 impl std::fmt::Debug for CgSteps {
@@ -181,13 +189,25 @@ impl CgSteps {
     ) -> Result<Option<CgNext>, String> {
         let mut queue = self.queue.lock().unwrap_or_else(|p| p.into_inner());
         let cell_m = self.cell_m();
-        if let Some((start, _)) = queue.front()
-            && same_place(start, state, cell_m)
+        if let Some(next) = queue.front()
+            && same_place(&next.start, state, cell_m)
         {
-            return Ok(queue.pop_front().map(|(_, step)| CgNext {
-                step,
-                new_plan: None,
-            }));
+            // The robot stands where the step starts, give or take a few millimetres: its
+            // moves are carried out again from where it really stands, so that the feet
+            // keep their clearances from the real state, not the planned one.
+            let planned = queue.pop_front().expect("a front");
+            let grid = *self.space.lock().unwrap_or_else(|p| p.into_inner()).grid();
+            match self.replay(state, &grid, &planned.moves) {
+                Ok(step) => {
+                    return Ok(Some(CgNext {
+                        step,
+                        new_plan: None,
+                    }));
+                }
+                Err(why) => {
+                    tracing::debug!(%why, "a planned step does not hold from where the robot stands; planning again");
+                }
+            }
         }
         queue.clear();
         let mut space = self.space.lock().unwrap_or_else(|p| p.into_inner());
@@ -231,8 +251,8 @@ impl CgSteps {
         let steps = executor.steps_of(&found)?;
         let summary = self.summary(&space, &found, executor.refused.get());
         *queue = steps.into();
-        Ok(queue.pop_front().map(|(_, step)| CgNext {
-            step,
+        Ok(queue.pop_front().map(|q| CgNext {
+            step: q.step,
             new_plan: Some(summary),
         }))
     }
@@ -308,6 +328,43 @@ impl CgSteps {
         self.gait
             .move_body_to(at, &self.view, &target)
             .map_err(|e| format!("the body's move to ({:.2}, {:.2}): {e}", c.x, c.y))
+    }
+
+    /// Foot-level moves carried out one after another from `state` with the free gait's
+    /// checked single moves, as one step.
+    fn replay(
+        &self,
+        state: &GaitState,
+        grid: &CgGrid,
+        moves: &[FootStep],
+    ) -> Result<StepPlan, String> {
+        let mut at = state.clone();
+        let mut whole: Option<StepPlan> = None;
+        for fs in moves {
+            let plan = self.carry_out(&at, grid, fs)?;
+            at = plan.end.clone();
+            match &mut whole {
+                Some(step) => {
+                    step.actions.extend(plan.actions.iter().cloned());
+                    step.min_margin_m = step.min_margin_m.min(plan.min_margin_m);
+                    step.end = plan.end;
+                }
+                None => whole = Some(plan),
+            }
+        }
+        whole.ok_or_else(|| "a step without moves".to_owned())
+    }
+
+    /// One foot-level move carried out from `at`.
+    fn carry_out(&self, at: &GaitState, grid: &CgGrid, fs: &FootStep) -> Result<StepPlan, String> {
+        match *fs {
+            FootStep::Place { leg, to, .. } => {
+                self.gait
+                    .swing_to(at, &self.view, leg, grid.centre(to.0, to.1))
+            }
+            FootStep::Lift { leg, .. } => self.gait.lift_leg(at, &self.view, leg, self.lift_m),
+            FootStep::Advance { to, body_z } => self.advance(at, grid, to, body_z),
+        }
     }
 
     fn summary(&self, space: &CgSpace, found: &Plan, refused_moves: usize) -> CgPlanned {
@@ -419,7 +476,7 @@ impl<'a> Executor<'a> {
     }
 
     /// The plan's moves as steps, each the moves before an advance and the advance.
-    fn steps_of(&self, found: &Plan) -> Result<Vec<(GaitState, StepPlan)>, String> {
+    fn steps_of(&self, found: &Plan) -> Result<Vec<Queued>, String> {
         let states = self.states.borrow();
         let route = &found.feet.route;
         let mut stance = found.feet.start.clone();
@@ -427,7 +484,7 @@ impl<'a> Executor<'a> {
             return Err("the plan does not start where the robot stands".to_owned());
         };
         let mut steps = Vec::new();
-        let mut pending: Option<(GaitState, StepPlan)> = None;
+        let mut pending: Option<Queued> = None;
         for fs in &found.feet.steps {
             apply_step(&mut stance, fs);
             let Some(((end, Some(move_plan)), _)) = states.get(&(route[stance.k], stance.clone()))
@@ -435,22 +492,29 @@ impl<'a> Executor<'a> {
                 return Err(format!("the plan's move {fs:?} was not checked"));
             };
             match &mut pending {
-                Some((_, step)) => {
-                    step.actions.extend(move_plan.actions.iter().cloned());
-                    step.min_margin_m = step.min_margin_m.min(move_plan.min_margin_m);
-                    step.end = end.clone();
+                Some(q) => {
+                    q.step.actions.extend(move_plan.actions.iter().cloned());
+                    q.step.min_margin_m = q.step.min_margin_m.min(move_plan.min_margin_m);
+                    q.step.end = end.clone();
+                    q.moves.push(*fs);
                 }
-                None => pending = Some((at.clone(), move_plan.clone())),
+                None => {
+                    pending = Some(Queued {
+                        start: at.clone(),
+                        step: move_plan.clone(),
+                        moves: vec![*fs],
+                    });
+                }
             }
             if matches!(fs, FootStep::Advance { .. })
-                && let Some(p) = pending.take()
+                && let Some(q) = pending.take()
             {
-                steps.push(p);
+                steps.push(q);
             }
             at = end.clone();
         }
-        if let Some(p) = pending.take() {
-            steps.push(p);
+        if let Some(q) = pending.take() {
+            steps.push(q);
         }
         Ok(steps)
     }
@@ -494,15 +558,7 @@ impl MoveCheck for Executor<'_> {
                 "checking moves"
             );
         }
-        let s = self.steps;
-        let planned = match *step {
-            FootStep::Place { leg, to, .. } => {
-                s.gait
-                    .swing_to(&state, &s.view, leg, self.grid.centre(to.0, to.1))
-            }
-            FootStep::Lift { leg, .. } => s.gait.lift_leg(&state, &s.view, leg, s.lift_m),
-            FootStep::Advance { to, body_z } => s.advance(&state, &self.grid, to, body_z),
-        };
+        let planned = self.steps.carry_out(&state, &self.grid, step);
         match planned {
             Ok(p) => {
                 let generation = self.generations.get();
@@ -654,5 +710,52 @@ mod tests {
             0,
             "the planner offered moves the robot refuses"
         );
+    }
+
+    #[test]
+    fn a_step_taken_a_few_millimetres_off_its_start_is_carried_out_from_there() {
+        let (steps, state) = ambler_on_flat();
+        let goal = Point2::new(9.0, 0.0);
+        let mut space = steps.space.lock().expect("the space");
+        let grid = *space.grid();
+        let executor = Executor::new(&steps, &grid, &state);
+        let plan = steps
+            .plan_from(&mut space, &state, (goal, 0.0), &executor, &mut LocalRoutes)
+            .expect("a plan on flat ground");
+        drop(space);
+        let queued = executor.steps_of(&plan).expect("the plan's steps");
+        // The second step, with the robot standing 3 mm further along x than planned (the
+        // whole robot shifted: the same joints, every foot 3 mm along).
+        let planned = &queued[1];
+        let shift = nalgebra::Vector3::new(0.003, 0.0, 0.0);
+        let mut real = planned.start.clone();
+        real.body.translation.vector += shift;
+        for leg in &mut real.legs {
+            leg.foot += shift;
+        }
+        assert!(same_place(&planned.start, &real, grid.cell_m));
+        let step = steps
+            .replay(&real, &grid, &planned.moves)
+            .expect("the step holds from there");
+        let moved: Vec<usize> = planned
+            .moves
+            .iter()
+            .filter_map(|m| match *m {
+                FootStep::Place { leg, .. } | FootStep::Lift { leg, .. } => Some(leg),
+                FootStep::Advance { .. } => None,
+            })
+            .collect();
+        let kept: Vec<usize> = (0..real.legs.len())
+            .filter(|l| real.legs[*l].stance && !moved.contains(l))
+            .collect();
+        assert!(!kept.is_empty(), "every leg moved in the step");
+        for l in kept {
+            let (got, was) = (step.end.legs[l].foot, planned.step.end.legs[l].foot);
+            assert!(
+                (got - real.legs[l].foot).norm() < 1e-9,
+                "leg {l}'s foot stays where it really stands"
+            );
+            assert!((got - was).norm() > 0.002, "leg {l} still as planned");
+        }
     }
 }
