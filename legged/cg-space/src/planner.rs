@@ -41,7 +41,8 @@ pub struct PlanParams {
     /// How near the goal the CG must come, metres: 0 asks for the goal's own cell. Above 0,
     /// a search that sticks once the CG stands on a route cell whose centre is this near the
     /// goal has arrived: the plan ends there (its moves put to the outside check first)
-    /// instead of marking cells round the goal and replanning.
+    /// instead of marking cells round the goal and replanning. Where the goal's own cell is
+    /// invalid, the plan heads for the valid cell nearest the goal within this distance.
     #[serde(default)]
     pub goal_tolerance_m: f64,
 }
@@ -200,6 +201,7 @@ pub fn plan_with(
     };
     let s = cell("the start", start.0, start.1)?;
     let g = cell("the goal", goal.0, goal.1)?;
+    let g = settle_goal(space, g, goal.0, params.goal_tolerance_m);
     let first_route = routes_from.route(space, s, g, &params.route)?;
     let mut route = first_route.cells.clone();
     let mut marked = Vec::new();
@@ -457,6 +459,32 @@ enum Failed {
     Stuck(SearchFailure),
     /// The check refused this many moves of the plans found.
     Refused(usize),
+}
+
+/// The cell a plan heads for: the goal's own, or where that is invalid and
+/// `tolerance_m` is above 0, the valid cell of the same heading nearest the goal whose centre
+/// lies within the tolerance of it (the goal's own cell is kept when there is none, and
+/// the route planner then says why it is invalid).
+fn settle_goal(space: &mut CgSpace, g: CgCell, goal: Point2<f64>, tolerance_m: f64) -> CgCell {
+    if tolerance_m.is_nan() || tolerance_m <= 0.0 || space.is_valid(g) {
+        return g;
+    }
+    let grid = *space.grid();
+    let r = (tolerance_m / grid.cell_m).ceil() as i32;
+    let mut best: Option<(f64, CgCell)> = None;
+    for dy in -r..=r {
+        for dx in -r..=r {
+            let c = CgCell::new(g.ix + dx, g.iy + dy, g.it);
+            if !grid.contains(c) {
+                continue;
+            }
+            let d = (grid.centre(c.ix, c.iy) - goal).norm();
+            if d <= tolerance_m && best.is_none_or(|(b, _)| d < b) && space.is_valid(c) {
+                best = Some((d, c));
+            }
+        }
+    }
+    best.map_or(g, |(_, c)| c)
 }
 
 /// Searches from `from`, and puts each plan found to `check` move by move; at the first move

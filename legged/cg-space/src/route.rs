@@ -160,7 +160,7 @@ pub(crate) fn route_ends(
                 ix: c.ix,
                 iy: c.iy,
                 it: c.it,
-                reason: format!("{:?}", space.verdict(c)),
+                reason: space.verdict(c).describe(),
             });
         }
     }

@@ -33,6 +33,31 @@ impl Verdict {
     pub fn is_valid(&self) -> bool {
         matches!(self, Verdict::Valid { .. })
     }
+
+    /// The verdict in words, for messages.
+    pub fn describe(&self) -> String {
+        match *self {
+            Verdict::Valid { lo, at } => {
+                format!(
+                    "valid: the body origin from {lo:.3} m up, every quadrant held at {at:.3} m"
+                )
+            }
+            Verdict::OffMap => "the robot's underside there reaches past the map's edge (a point \
+                 further inside the map, or a larger map)"
+                .to_owned(),
+            Verdict::EmptyQuadrant(q) => format!(
+                "no leg can reach a foot cell with traction in the {} quadrant",
+                ["front-left", "rear-left", "rear-right", "front-right"]
+                    .get(usize::from(q))
+                    .copied()
+                    .unwrap_or("unknown")
+            ),
+            Verdict::NoHeight => "no body height lets a foot in every quadrant reach the ground \
+                 with the underside clear of it"
+                .to_owned(),
+            Verdict::Marked => "the foot-level search found it impassable".to_owned(),
+        }
+    }
 }
 
 /// The lowest the body origin may stand over a CG cell so that its under-carriage clears

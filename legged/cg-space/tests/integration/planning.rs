@@ -443,3 +443,34 @@ fn every_move_of_a_replanned_plan_was_put_to_the_check() {
         at = next;
     }
 }
+
+#[test]
+fn a_goal_too_near_the_maps_edge_is_approached_within_the_tolerance() {
+    // Flat ground ending at x = 20 m: with the goal 1 m from that edge the Ambler's
+    // underside would reach past it, so the goal's own cell is invalid. Asked for that cell,
+    // the planner says so; allowed 2 m, it plans to the nearest valid cell within them.
+    let t = common::terrain(0.0, 20.0, -8.0, 8.0, 0.1, |_, _| 0.0);
+    let mut space = ambler_space(&t);
+    let grid = *space.grid();
+    let (start, goal) = (Point2::new(10.0, 0.0), Point2::new(19.0, 0.0));
+    let g = grid.cell_of(goal, 0.0).expect("on the map");
+    assert_eq!(space.verdict(g), Verdict::OffMap);
+    let exact = PlanParams::default();
+    match plan(&mut space, (start, 0.0), (goal, 0.0), None, &exact) {
+        Err(CgError::InvalidEndpoint { what, reason, .. }) => {
+            assert_eq!(what, "goal");
+            assert!(reason.contains("map's edge"), "{reason}");
+        }
+        other => panic!("the goal's own cell is invalid: {other:?}"),
+    }
+    let tolerant = PlanParams {
+        goal_tolerance_m: 2.0,
+        ..PlanParams::default()
+    };
+    let p = plan(&mut space, (start, 0.0), (goal, 0.0), None, &tolerant)
+        .expect("a plan to a cell near the goal");
+    let end = *p.feet.route.last().expect("a route");
+    let at = grid.centre(end.ix, end.iy);
+    assert!((at - goal).norm() <= 2.0, "ends at {at:?}");
+    assert!(space.verdict(end).is_valid());
+}
