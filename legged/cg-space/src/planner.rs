@@ -229,7 +229,8 @@ pub fn plan_with(
     // searches that got no nearer than that.
     let mut nearest = i32::MAX;
     let mut futile = 0usize;
-    loop {
+    // The plan's route, the stance it first chose, its steps and the last search's nodes.
+    let (route, first, steps, nodes) = loop {
         let mut search = FootSearch::new(space, &route, params.search.clone());
         if let Some(st) = standing {
             search = search.with_start(start, &st.feet);
@@ -252,22 +253,7 @@ pub fn plan_with(
             Ok(mut found) => {
                 let mut steps = kept.clone();
                 steps.append(&mut found.steps);
-                let initial_stance = initial.clone().unwrap_or(first);
-                return Ok(Plan {
-                    feet: FootPlan {
-                        route,
-                        start: Stance {
-                            k: 0,
-                            ..initial_stance
-                        },
-                        steps,
-                        nodes: found.nodes,
-                    },
-                    first_route,
-                    marked,
-                    routes,
-                    counts,
-                });
+                break (route, first, steps, found.nodes);
             }
             Err(Failed::Refused(n)) => {
                 return Err(CgError::NoFootfalls {
@@ -286,23 +272,8 @@ pub fn plan_with(
                     );
                     let mut steps = kept.clone();
                     steps.append(&mut near);
-                    let initial_stance = initial.clone().unwrap_or(first);
                     route.truncate(end + 1);
-                    return Ok(Plan {
-                        feet: FootPlan {
-                            route,
-                            start: Stance {
-                                k: 0,
-                                ..initial_stance
-                            },
-                            steps,
-                            nodes: fail.nodes,
-                        },
-                        first_route,
-                        marked,
-                        routes,
-                        counts,
-                    });
+                    break (route, first, steps, fail.nodes);
                 }
                 let left = grid.steps_between(route[fail.furthest], g);
                 if left < nearest {
@@ -446,7 +417,23 @@ pub fn plan_with(
                 }
             }
         }
-    }
+    };
+    let initial_stance = initial.unwrap_or(first);
+    Ok(Plan {
+        feet: FootPlan {
+            route,
+            start: Stance {
+                k: 0,
+                ..initial_stance
+            },
+            steps,
+            nodes,
+        },
+        first_route,
+        marked,
+        routes,
+        counts,
+    })
 }
 
 /// Plans the search found that the moves' check refused, at most, before the planner gives

@@ -605,6 +605,21 @@ mod tests {
         (steps, state)
     }
 
+    /// A plan from `state` to `goal` (the goal's own cell), with the executor that checked it.
+    fn plan_to<'a>(
+        steps: &'a CgSteps,
+        state: &GaitState,
+        goal: Point2<f64>,
+    ) -> (CgGrid, Executor<'a>, Plan) {
+        let mut space = steps.space.lock().expect("the space");
+        let grid = *space.grid();
+        let executor = Executor::new(steps, &grid, state);
+        let plan = steps
+            .plan_from(&mut space, state, (goal, 0.0), &executor, &mut LocalRoutes)
+            .expect("a plan");
+        (grid, executor, plan)
+    }
+
     /// The place the executor starts from, as it keys it.
     fn start_of(grid: &CgGrid, state: &GaitState) -> (CgCell, Stance) {
         let t = state.body.translation;
@@ -696,12 +711,7 @@ mod tests {
         // refuses (a planner that let them offered 142 such moves on the way).
         let (steps, state) = ambler_on_flat();
         let goal = Point2::new(9.0, 4.0);
-        let mut space = steps.space.lock().expect("the space");
-        let grid = *space.grid();
-        let executor = Executor::new(&steps, &grid, &state);
-        let plan = steps
-            .plan_from(&mut space, &state, (goal, 0.0), &executor, &mut LocalRoutes)
-            .expect("a plan to 4 m from the edge");
+        let (grid, executor, plan) = plan_to(&steps, &state, goal);
         let end = plan.feet.route.last().expect("a route");
         assert!((grid.centre(end.ix, end.iy) - goal).norm() < grid.cell_m);
         assert!(executor.checked.get() > 0);
@@ -715,14 +725,7 @@ mod tests {
     #[test]
     fn a_step_taken_a_few_millimetres_off_its_start_is_carried_out_from_there() {
         let (steps, state) = ambler_on_flat();
-        let goal = Point2::new(9.0, 0.0);
-        let mut space = steps.space.lock().expect("the space");
-        let grid = *space.grid();
-        let executor = Executor::new(&steps, &grid, &state);
-        let plan = steps
-            .plan_from(&mut space, &state, (goal, 0.0), &executor, &mut LocalRoutes)
-            .expect("a plan on flat ground");
-        drop(space);
+        let (grid, executor, plan) = plan_to(&steps, &state, Point2::new(9.0, 0.0));
         let queued = executor.steps_of(&plan).expect("the plan's steps");
         // The second step, with the robot standing 3 mm further along x than planned (the
         // whole robot shifted: the same joints, every foot 3 mm along).

@@ -16,6 +16,23 @@ fn ambler_space(terrain: &tca_robot::HeightField) -> CgSpace {
     CgSpace::for_model(&model, terrain, CgParams::default()).expect("a CG-space")
 }
 
+/// The cliff course (seed 1).
+fn cliff_course() -> tca_robot::HeightField {
+    tca_legged_courses::Course::builtin("cliff", 1)
+        .expect("the cliff course")
+        .terrain
+}
+
+/// The Ambler's CG-space with one heading bin, as walks plan: the robot keeps facing +X.
+fn ambler_one_heading(terrain: &tca_robot::HeightField) -> CgSpace {
+    let model = RobotModel::builtin("ambler").expect("the Ambler");
+    let cg = CgParams {
+        theta_bins: Some(1),
+        ..CgParams::default()
+    };
+    CgSpace::for_model(&model, terrain, cg).expect("a CG-space")
+}
+
 #[test]
 fn flat_ground_is_valid_and_a_plan_keeps_every_stance_standing() {
     let t = common::terrain(0.0, 20.0, -6.0, 6.0, 0.1, |_, _| 0.0);
@@ -179,9 +196,7 @@ fn straddled_patch_leaves_cg_cells_valid_and_a_large_region_grows_a_border() {
 fn cliff_is_invalid_and_the_route_takes_the_ramp() {
     // The walking course's cliff: its ramp is wide enough for the Ambler to stand on with
     // every leg clear of the others (the search checks the legs' links against each other).
-    let t = tca_legged_courses::Course::builtin("cliff", 1)
-        .expect("the cliff course")
-        .terrain;
+    let t = cliff_course();
     let mut space = ambler_space(&t);
     let grid = *space.grid();
     // Standing across the cliff face is impossible: feet at the base and on top.
@@ -220,16 +235,9 @@ fn after_backing_off_from_where_the_search_stuck_the_plan_still_holds_together()
     // The cliff course with the feedback backing off four cells from where a search got
     // stuck: the steps kept before the back-off and those searched after it make one plan
     // whose every stance stands, along one unbroken route that takes the ramp.
-    let t = tca_legged_courses::Course::builtin("cliff", 1)
-        .expect("the cliff course")
-        .terrain;
+    let t = cliff_course();
     // One heading bin, as walks plan: the robot keeps facing +X.
-    let model = RobotModel::builtin("ambler").expect("the Ambler");
-    let cg = CgParams {
-        theta_bins: Some(1),
-        ..CgParams::default()
-    };
-    let mut space = CgSpace::for_model(&model, &t, cg).expect("a CG-space");
+    let mut space = ambler_one_heading(&t);
     let grid = *space.grid();
     let params = PlanParams {
         backoff_cells: 4,
@@ -310,15 +318,8 @@ fn a_search_stuck_within_the_goals_tolerance_has_arrived() {
     // goal. Asking for the goal's own cell, that is the end of planning; with a tolerance
     // that takes in every cell the search reached, the plan ends on the furthest of them,
     // and it holds together as any plan does.
-    let t = tca_legged_courses::Course::builtin("cliff", 1)
-        .expect("the cliff course")
-        .terrain;
-    let model = RobotModel::builtin("ambler").expect("the Ambler");
-    let cg = CgParams {
-        theta_bins: Some(1),
-        ..CgParams::default()
-    };
-    let mut space = CgSpace::for_model(&model, &t, cg).expect("a CG-space");
+    let t = cliff_course();
+    let mut space = ambler_one_heading(&t);
     let grid = *space.grid();
     let (start, goal) = (Point2::new(4.0, 0.0), Point2::new(24.0, 0.0));
     let exact = PlanParams {
@@ -357,16 +358,9 @@ fn searches_that_stick_nearer_the_goal_do_not_use_up_the_replans() {
     // On the cliff course the plan marks three cells; one of those searches got no nearer
     // the goal than the one before it. A budget of two such searches is enough (the others
     // made progress), a budget of one is not.
-    let t = tca_legged_courses::Course::builtin("cliff", 1)
-        .expect("the cliff course")
-        .terrain;
-    let model = RobotModel::builtin("ambler").expect("the Ambler");
-    let cg = CgParams {
-        theta_bins: Some(1),
-        ..CgParams::default()
-    };
+    let t = cliff_course();
     let attempt = |max_replans: usize| {
-        let mut space = CgSpace::for_model(&model, &t, cg.clone()).expect("a CG-space");
+        let mut space = ambler_one_heading(&t);
         let params = PlanParams {
             backoff_cells: 4,
             max_replans,
@@ -406,15 +400,8 @@ fn every_move_of_a_replanned_plan_was_put_to_the_check() {
     // With the feedback backing off after a stuck search, the steps kept from that search
     // are part of the plan: the outside check must have seen each of them, as it has seen
     // the moves of the searches that succeeded.
-    let t = tca_legged_courses::Course::builtin("cliff", 1)
-        .expect("the cliff course")
-        .terrain;
-    let model = RobotModel::builtin("ambler").expect("the Ambler");
-    let cg = CgParams {
-        theta_bins: Some(1),
-        ..CgParams::default()
-    };
-    let mut space = CgSpace::for_model(&model, &t, cg).expect("a CG-space");
+    let t = cliff_course();
+    let mut space = ambler_one_heading(&t);
     let params = PlanParams {
         backoff_cells: 4,
         ..PlanParams::default()
