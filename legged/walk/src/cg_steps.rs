@@ -246,7 +246,7 @@ impl CgSteps {
             "CG-space planned the walk"
         );
         if found.feet.steps.is_empty() {
-            return Ok(None);
+            return Ok(self.final_approach(state, goal, tolerance_m));
         }
         let steps = executor.steps_of(&found)?;
         let summary = self.summary(&space, &found, executor.refused.get());
@@ -328,6 +328,34 @@ impl CgSteps {
         self.gait
             .move_body_to(at, &self.view, &target)
             .map_err(|e| format!("the body's move to ({:.2}, {:.2}): {e}", c.x, c.y))
+    }
+
+    /// With the plan done (the CG in its last cell) but the body further than `tolerance_m`
+    /// from the goal (a cell wider than the tolerance), the body's move onto the goal
+    /// itself, the feet where they stand; `None` when the body is near enough already or
+    /// the move cannot be made (the walk then reports how far it stopped).
+    fn final_approach(
+        &self,
+        state: &GaitState,
+        goal: Point2<f64>,
+        tolerance_m: f64,
+    ) -> Option<CgNext> {
+        let t = state.body.translation.vector;
+        if (Point2::new(t.x, t.y) - goal).norm() <= tolerance_m {
+            return None;
+        }
+        let target =
+            Isometry3::from_parts(Translation3::new(goal.x, goal.y, t.z), state.body.rotation);
+        match self.gait.move_body_to(state, &self.view, &target) {
+            Ok(step) => Some(CgNext {
+                step,
+                new_plan: None,
+            }),
+            Err(why) => {
+                tracing::debug!(%why, "the body cannot move onto the goal from the plan's last cell");
+                None
+            }
+        }
     }
 
     /// Foot-level moves carried out one after another from `state` with the free gait's
@@ -760,5 +788,23 @@ mod tests {
             );
             assert!((got - was).norm() > 0.002, "leg {l} still as planned");
         }
+    }
+
+    #[test]
+    fn a_goal_off_its_cells_centre_is_reached_by_a_last_body_move() {
+        // The goal 0.2 m from where the body stands, in a cell of 0.3 m: the plan has
+        // nothing to do at the cell level, so the body moves onto the goal itself.
+        let (steps, state) = ambler_on_flat();
+        let t = state.body.translation.vector;
+        let goal = Point2::new(t.x + 0.12, t.y + 0.16);
+        let step = steps
+            .final_approach(&state, goal, 0.05)
+            .expect("a move onto the goal");
+        let end = step.step.end.body.translation.vector;
+        assert!((Point2::new(end.x, end.y) - goal).norm() < 1e-6);
+        assert!((end.z - t.z).abs() < 1e-9);
+        assert!(step.new_plan.is_none());
+        // Near enough already: nothing to do.
+        assert!(steps.final_approach(&state, goal, 0.3).is_none());
     }
 }
