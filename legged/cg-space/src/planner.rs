@@ -346,30 +346,28 @@ pub fn plan_with(
                 // Keep the steps up to the stance that reached the route cell `keep` (the
                 // furthest, less the back-off, but not before where this search started),
                 // and plan the rest of the route from there.
-                // A stuck search's steps were never put to the outside check (only whole
-                // plans are): the kept ones are put to it here, in order, and the prefix
-                // ends before the first it refuses, so the next search starts from a stance
-                // the check has seen the robot reach.
+                // The kept steps are put to the outside check first, and end before the
+                // first it refuses: the next search starts from a stance the check has seen
+                // the robot reach.
                 let keep = fail
                     .furthest
                     .saturating_sub(params.backoff_cells)
                     .max(from.k);
-                let mut reached = from.clone();
-                let mut prefix = Vec::new();
-                for st in &fail.steps_to_furthest {
-                    if reached.k >= keep {
-                        break;
-                    }
-                    let mut next = reached.clone();
-                    apply(&mut next, st);
-                    if let Some(check) = check
-                        && !check.check(&reached, route[reached.k], st, &next, route[next.k])
-                    {
-                        break;
-                    }
-                    reached = next;
-                    prefix.push(*st);
-                }
+                let mut k = from.k;
+                let wanted = fail
+                    .steps_to_furthest
+                    .iter()
+                    .take_while(|st| {
+                        let go = k < keep;
+                        if matches!(st, FootStep::Advance { .. }) {
+                            k += 1;
+                        }
+                        go
+                    })
+                    .count();
+                let (reached, passed) =
+                    checked_in_order(&from, &fail.steps_to_furthest[..wanted], &route, check);
+                let prefix = fail.steps_to_furthest[..passed].to_vec();
                 let keep = reached.k;
                 let here = route[keep];
                 let rest = routes_from.route(space, here, g, &params.route);
@@ -474,8 +472,6 @@ fn settle_goal(space: &mut CgSpace, g: CgCell, goal: Point2<f64>, tolerance_m: f
     best.map_or(g, |(_, c)| c)
 }
 
-/// Searches from `from`, and puts each plan found to `check` move by move; at the first move
-/// it refuses, forbids that move from its stance and searches again.
 /// Where a stuck search already stood within the goal's tolerance: the last route cell it
 /// reached whose centre is within `params.goal_tolerance_m` of `goal`, and the steps from
 /// `from` to the first stance on that cell, provided `check` accepts each of them. `None`
@@ -509,21 +505,36 @@ fn arrival_near_goal(
         }
     }
     let (end, n) = best?;
-    let steps = fail.steps_to_furthest[..n].to_vec();
-    if let Some(check) = check {
-        let mut at = from.clone();
-        for step in &steps {
-            let mut next = at.clone();
-            apply(&mut next, step);
-            if !check.check(&at, route[at.k], step, &next, route[next.k]) {
-                return None;
-            }
-            at = next;
-        }
-    }
-    Some((end, steps))
+    let steps = &fail.steps_to_furthest[..n];
+    let (_, passed) = checked_in_order(from, steps, route, check);
+    (passed == n).then(|| (end, steps.to_vec()))
 }
 
+/// Puts `steps` from `from` to `check` in order (a stuck search's steps never were: only
+/// whole plans are): the stance the accepted ones lead to and how many were accepted, up to
+/// the first refused. Without a check every step is accepted.
+fn checked_in_order(
+    from: &Stance,
+    steps: &[FootStep],
+    route: &[CgCell],
+    check: Option<&dyn MoveCheck>,
+) -> (Stance, usize) {
+    let mut at = from.clone();
+    for (n, step) in steps.iter().enumerate() {
+        let mut next = at.clone();
+        apply(&mut next, step);
+        if let Some(check) = check
+            && !check.check(&at, route[at.k], step, &next, route[next.k])
+        {
+            return (at, n);
+        }
+        at = next;
+    }
+    (at, steps.len())
+}
+
+/// Searches from `from`, and puts each plan found to `check` move by move; at the first move
+/// it refuses, forbids that move from its stance and searches again.
 fn search_checked(
     search: &mut FootSearch<'_>,
     from: &Stance,
