@@ -3,7 +3,7 @@
 //! ([`footmoves`](crate::footmoves)); each move checked on the robot's own legs
 //! ([`footcheck`](crate::footcheck)) before the search takes it.
 
-use std::collections::HashSet;
+use rustc_hash::{FxHashMap, FxHashSet};
 
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
@@ -125,7 +125,9 @@ pub struct SearchParams {
     /// Foot moves allowed between two CG advances.
     pub moves_between_advances: usize,
     /// Nodes expanded without getting further along the route before the search gives up
-    /// on the next cell (the time-out that feeds back to the route planner).
+    /// on the next cell (the time-out that feeds back to the route planner). By default 400:
+    /// on long routes most of the planning time goes into searches that stick, and a
+    /// search that has not got on within a few hundred nodes seldom does.
     pub stall_nodes: usize,
 }
 
@@ -135,7 +137,7 @@ impl Default for SearchParams {
             candidates: 4,
             lookahead: 40,
             moves_between_advances: 12,
-            stall_nodes: 1_000,
+            stall_nodes: 400,
         }
     }
 }
@@ -252,11 +254,10 @@ pub struct FootSearch<'a> {
     lookup: Vec<Vec<Vec<Option<Reach>>>>,
     half: i32,
     /// Moves (from one stance to another) never to be taken.
-    forbidden: HashSet<(Stance, Stance)>,
+    forbidden: FxHashSet<(Stance, Stance)>,
     pub(crate) legs: Legs<'a>,
     /// How many route cells ahead a foothold stays usable, by leg, route index and cell.
-    pub(crate) useful:
-        std::cell::RefCell<std::collections::HashMap<(usize, usize, FootCell), usize>>,
+    pub(crate) useful: std::cell::RefCell<FxHashMap<(usize, usize, FootCell), usize>>,
     pub(crate) refused_by_legs: std::cell::Cell<u64>,
     refused_by_check: u64,
     /// Where the body stands at the route's first cell, when it is not the cell's centre.
@@ -314,7 +315,7 @@ impl<'a> FootSearch<'a> {
             params,
             lookup,
             half,
-            forbidden: HashSet::new(),
+            forbidden: FxHashSet::default(),
             legs: Legs::new(&robot.model),
             useful: Default::default(),
             refused_by_legs: std::cell::Cell::new(0),
@@ -390,7 +391,7 @@ impl<'a> FootSearch<'a> {
             since_advance: usize,
         }
         let last = self.route.len() - 1;
-        let mut visited: HashSet<Stance> = HashSet::new();
+        let mut visited: FxHashSet<Stance> = FxHashSet::default();
         visited.insert(start.clone());
         let mut nodes = 1usize;
         if start.k >= last {

@@ -7,8 +7,8 @@
 //! holds it, no link of one leg comes within the leg clearance of another's, and the
 //! centre of mass (from every link) stays over the standing feet.
 
+use rustc_hash::FxHashMap;
 use std::cell::RefCell;
-use std::collections::HashMap;
 use std::rc::Rc;
 
 use nalgebra::{Isometry3, Point2, Point3, Translation3, UnitQuaternion, Vector3};
@@ -18,7 +18,7 @@ use tca_legged_model::{IkOptions, LegParts, RobotModel};
 const QUANTUM_M: f64 = 0.005;
 
 /// Leg poses worked out so far, by leg and quantised body-frame target.
-type PoseCache = HashMap<(usize, [i64; 3]), Option<Rc<LegPose>>>;
+type PoseCache = FxHashMap<(usize, [i64; 3]), Option<Rc<LegPose>>>;
 
 /// One leg with its foot at a point: joints and parts.
 #[derive(Debug, Clone)]
@@ -107,7 +107,7 @@ impl<'a> Legs<'a> {
             neutral,
             body_mass,
             body_moment,
-            cache: RefCell::new(HashMap::new()),
+            cache: RefCell::new(FxHashMap::default()),
             solved: RefCell::new(0),
         }
     }

@@ -3,11 +3,13 @@
 
 use std::collections::{HashMap, VecDeque};
 
+use rustc_hash::FxHashMap;
+
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::astar::{Block, astar};
+use crate::astar::{Block, astar, route_cost};
 use crate::error::CgError;
 use crate::grid::CgCell;
 use crate::space::CgSpace;
@@ -28,6 +30,15 @@ pub struct RouteParams {
     /// Cells the flood explores from each end before the roadmap starts; a flood that
     /// exhausts one end's region within this proves there is no route.
     pub flood_budget: usize,
+    /// The longest stretch of a roadmap's route, in cells, that [`shortcut`] tries to
+    /// replace by one A* search; 0 keeps the roadmap's route as it is. The batched
+    /// roadmap ([`roadmap_batched`](crate::distribute::roadmap_batched)) does not cut.
+    #[serde(default = "default_shortcut_cells")]
+    pub shortcut_cells: usize,
+}
+
+fn default_shortcut_cells() -> usize {
+    64
 }
 
 impl Default for RouteParams {
@@ -39,6 +50,7 @@ impl Default for RouteParams {
             max_draws: 20_000,
             seed: 1,
             flood_budget: 2_000,
+            shortcut_cells: default_shortcut_cells(),
         }
     }
 }
@@ -76,7 +88,8 @@ pub enum Flood {
 /// up to `budget` cells each (`usize::MAX`: the whole map, so always decisive).
 pub fn flood(space: &mut CgSpace, start: CgCell, goal: CgCell, budget: usize) -> Flood {
     let grid = *space.grid();
-    let mut parent: [HashMap<CgCell, Option<CgCell>>; 2] = [HashMap::new(), HashMap::new()];
+    let mut parent: [FxHashMap<CgCell, Option<CgCell>>; 2] =
+        [FxHashMap::default(), FxHashMap::default()];
     let mut queue: [VecDeque<CgCell>; 2] = [VecDeque::new(), VecDeque::new()];
     let ends = [start, goal];
     for side in 0..2 {
@@ -138,7 +151,8 @@ pub fn plan_route(
     if let Some(route) = route_ends(space, start, goal, params)? {
         return Ok(route);
     }
-    if let Some(route) = roadmap(space, start, goal, params) {
+    if let Some(mut route) = roadmap(space, start, goal, params) {
+        route.cells = shortcut(space, &route.cells, params);
         return Ok(route);
     }
     flood_fallback(space, start, goal, params)
@@ -339,4 +353,48 @@ pub fn roadmap(
         searches,
         points: points.len(),
     })
+}
+
+/// The shortest span of route cells [`shortcut`] tries to cut.
+const SHORTEST_CUT: usize = 4;
+
+/// A roadmap's route with its detours cut: from each cell reached, A* (in the block about
+/// the two cells) to the route cell `params.shortcut_cells` further on, or half as far, and
+/// so on down to a few cells, and the first that is cheaper than the stretch it replaces
+/// (see [`route_cost`](crate::astar::route_cost)) takes its place; where none is, the route
+/// goes on as it was for a few cells. The roadmap's route passes through its randomly drawn
+/// points, each at a random heading; this leaves the ones that were on the way. Every cell
+/// of the result is valid, and the result costs no more than the route given.
+pub fn shortcut(space: &mut CgSpace, cells: &[CgCell], params: &RouteParams) -> Vec<CgCell> {
+    let Some(&first) = cells.first() else {
+        return Vec::new();
+    };
+    let last = cells.len() - 1;
+    let mut out = vec![first];
+    let mut i = 0;
+    while i < last {
+        let mut span = params.shortcut_cells.min(last - i);
+        let mut cut = None;
+        while span >= SHORTEST_CUT {
+            let (a, b) = (cells[i], cells[i + span]);
+            let found = astar(space, a, b, Block::about(a, b, params.block_margin)).route;
+            if let Some(r) = found.filter(|r| route_cost(r) < route_cost(&cells[i..=i + span])) {
+                cut = Some((i + span, r));
+                break;
+            }
+            span /= 2;
+        }
+        match cut {
+            Some((j, r)) => {
+                out.extend_from_slice(&r[1..]);
+                i = j;
+            }
+            None => {
+                let j = (i + SHORTEST_CUT).min(last);
+                out.extend_from_slice(&cells[i + 1..=j]);
+                i = j;
+            }
+        }
+    }
+    out
 }

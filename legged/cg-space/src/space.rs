@@ -1,6 +1,6 @@
 //! CG-space built lazily, region by region, with a cap on the regions held.
 
-use std::collections::{HashMap, HashSet};
+use rustc_hash::{FxHashMap, FxHashSet};
 use std::sync::Arc;
 
 use tca_robot::HeightField;
@@ -37,8 +37,8 @@ pub struct CgSpace {
     robot: Arc<CgRobot>,
     grid: CgGrid,
     foot: Arc<FootMap>,
-    regions: HashMap<RegionKey, Region>,
-    marked: HashSet<CgCell>,
+    regions: FxHashMap<RegionKey, Region>,
+    marked: FxHashSet<CgCell>,
     max_regions: Option<usize>,
     tick: u64,
     evaluations: u64,
@@ -60,8 +60,8 @@ impl CgSpace {
             robot,
             grid,
             foot,
-            regions: HashMap::new(),
-            marked: HashSet::new(),
+            regions: FxHashMap::default(),
+            marked: FxHashSet::default(),
             max_regions: None,
             tick: 0,
             evaluations: 0,
@@ -226,7 +226,7 @@ impl CgSpace {
     }
 
     /// The cells marked invalid from outside.
-    pub fn marked(&self) -> &HashSet<CgCell> {
+    pub fn marked(&self) -> &FxHashSet<CgCell> {
         &self.marked
     }
 }

@@ -93,7 +93,7 @@ pub fn assess(robot: &CgRobot, grid: &CgGrid, foot: &FootMap, cell: CgCell) -> V
         return Verdict::OffMap;
     };
     // Body-height intervals offered by each quadrant's reachable valid foot cells.
-    let mut events: Vec<(f64, i8, u8)> = Vec::new();
+    let mut spans: Vec<(f64, f64, u8)> = Vec::new();
     let mut seen = [false; 4];
     for (leg, cells) in table.legs.iter().enumerate() {
         let r = robot.foot_radius[leg];
@@ -112,22 +112,111 @@ pub fn assess(robot: &CgRobot, grid: &CgGrid, foot: &FootMap, cell: CgCell) -> V
             let (lo, hi) = foot_interval(g, r, c.z_lo, c.z_hi);
             let lo = lo.max(min_h);
             if lo <= hi {
-                events.push((lo, 1, c.quadrant));
-                events.push((hi, -1, c.quadrant));
+                spans.push((lo, hi, c.quadrant));
             }
         }
     }
     if let Some(q) = (0..4u8).find(|&q| !seen[usize::from(q)]) {
         return Verdict::EmptyQuadrant(q);
     }
-    // Sweep the heights: opening events before closing ones at the same height.
-    events.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
-    let mut open = [0i32; 4];
-    for (h, kind, q) in events {
-        open[usize::from(q)] += i32::from(kind);
-        if kind > 0 && open.iter().all(|&n| n > 0) {
-            return Verdict::Valid { lo: min_h, at: h };
+    match lowest_common_height(&spans) {
+        Some(at) => Verdict::Valid { lo: min_h, at },
+        None => Verdict::NoHeight,
+    }
+}
+
+/// The lowest height that lies in some interval `lo..=hi` of every quadrant `0..4`, from
+/// `(lo, hi, quadrant)` triples; `None` if there is none.
+///
+/// The answer is always some interval's `lo`. Starting from the highest of the quadrants'
+/// lowest `lo`s (nothing below it can serve all four), a height that a quadrant does not
+/// cover moves up to that quadrant's next `lo` above it (every interval of that quadrant
+/// reaching the answer starts above the height), until all four cover it: a few passes over
+/// the intervals instead of a sort.
+pub fn lowest_common_height(spans: &[(f64, f64, u8)]) -> Option<f64> {
+    let mut lowest = [f64::INFINITY; 4];
+    for &(lo, _, q) in spans {
+        let q = usize::from(q);
+        if q < 4 {
+            lowest[q] = lowest[q].min(lo);
         }
     }
-    Verdict::NoHeight
+    let mut h = lowest.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if !h.is_finite() {
+        return None;
+    }
+    loop {
+        let mut moved = false;
+        for q in 0..4u8 {
+            let mut covered = false;
+            let mut next = f64::INFINITY;
+            for &(lo, hi, p) in spans {
+                if p != q {
+                    continue;
+                }
+                if lo <= h && h <= hi {
+                    covered = true;
+                    break;
+                }
+                if lo > h {
+                    next = next.min(lo);
+                }
+            }
+            if !covered {
+                if !next.is_finite() {
+                    return None;
+                }
+                h = next;
+                moved = true;
+            }
+        }
+        if !moved {
+            return Some(h);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::lowest_common_height;
+    use proptest::prelude::*;
+
+    /// The same answer by sorting every interval's ends and sweeping them upwards.
+    fn by_sweep(spans: &[(f64, f64, u8)]) -> Option<f64> {
+        let mut events: Vec<(f64, i8, u8)> = spans
+            .iter()
+            .flat_map(|&(lo, hi, q)| [(lo, 1, q), (hi, -1, q)])
+            .collect();
+        events.sort_by(|a, b| a.0.total_cmp(&b.0).then(b.1.cmp(&a.1)));
+        let mut open = [0i32; 4];
+        for (h, kind, q) in events {
+            open[usize::from(q)] += i32::from(kind);
+            if kind > 0 && open.iter().all(|&n| n > 0) {
+                return Some(h);
+            }
+        }
+        None
+    }
+
+    proptest! {
+        #[test]
+        fn the_lowest_common_height_is_the_sweeps(
+            raw in proptest::collection::vec((0u8..40, 0u8..12, 0u8..4), 0..40),
+        ) {
+            // Heights on a coarse grid, so that ends often coincide.
+            let spans: Vec<(f64, f64, u8)> = raw
+                .iter()
+                .map(|&(lo, len, q)| (f64::from(lo) * 0.05, f64::from(lo + len) * 0.05, q))
+                .collect();
+            prop_assert_eq!(lowest_common_height(&spans), by_sweep(&spans));
+        }
+    }
+
+    #[test]
+    fn one_quadrant_without_intervals_has_no_common_height() {
+        let spans = [(0.0, 1.0, 0), (0.0, 1.0, 1), (0.0, 1.0, 2)];
+        assert_eq!(lowest_common_height(&spans), None);
+        let all = [(0.0, 1.0, 0), (0.5, 1.0, 1), (0.2, 0.6, 2), (0.4, 2.0, 3)];
+        assert_eq!(lowest_common_height(&all), Some(0.5));
+    }
 }

@@ -8,14 +8,36 @@ use nalgebra::{Point3, Vector3};
 use crate::error::KinematicsError;
 use crate::model::RobotModel;
 
-/// One capsule of a leg link: axis ends and radius in the body frame, and the ball that
-/// holds the link's whole shape (centre, radius).
+/// One capsule of a leg link: axis ends and radius in the body frame, the ball that holds
+/// the link's whole shape (centre, radius), and the capsule's own axis-aligned box.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Part {
     a: Point3<f64>,
     b: Point3<f64>,
     r: f64,
     ball: (Point3<f64>, f64),
+    lo: Point3<f64>,
+    hi: Point3<f64>,
+}
+
+impl Part {
+    fn new(a: Point3<f64>, b: Point3<f64>, r: f64, ball: (Point3<f64>, f64)) -> Self {
+        let grow = Vector3::repeat(r);
+        Part {
+            a,
+            b,
+            r,
+            ball,
+            lo: a.inf(&b) - grow,
+            hi: a.sup(&b) + grow,
+        }
+    }
+
+    /// Whether the two capsules' boxes are further apart than `gap` along some axis (then
+    /// the capsules' surfaces are too).
+    fn boxes_apart(&self, other: &Part, gap: f64) -> bool {
+        (0..3).any(|i| other.lo[i] - self.hi[i] > gap || self.lo[i] - other.hi[i] > gap)
+    }
 }
 
 /// A leg's links at some joint positions: their capsules and their mass moment, body frame.
@@ -56,6 +78,7 @@ impl LegParts {
             other.parts.iter().any(|b| {
                 let reach = a.ball.1 + b.ball.1 + 2.0 * margin_m;
                 (a.ball.0 - b.ball.0).norm_squared() <= reach * reach
+                    && !a.boxes_apart(b, 2.0 * margin_m)
                     && crate::segment_distance(a.a, a.b, b.a, b.b) < a.r + b.r + 2.0 * margin_m
             })
         })
@@ -83,12 +106,7 @@ impl RobotModel {
                     c.shape.bounding_radius(),
                 );
                 for (a, b, r) in c.shape.capsules() {
-                    parts.push(Part {
-                        a: placed * a,
-                        b: placed * b,
-                        r,
-                        ball,
-                    });
+                    parts.push(Part::new(placed * a, placed * b, r, ball));
                 }
             }
         }

@@ -6,8 +6,8 @@ use std::time::{Duration, Instant};
 
 use nalgebra::Point2;
 use tca_cg_space::{
-    CgCell, CgError, CgParams, CgSpace, FootStep, MoveCheck, Plan, PlanParams, Stance, Verdict,
-    apply_step, plan, plan_checked,
+    CgCell, CgError, CgParams, CgSpace, FootStep, MoveCheck, Plan, PlanParams, SearchParams,
+    Stance, Verdict, apply_step, plan, plan_checked,
 };
 use tca_legged_model::RobotModel;
 
@@ -355,15 +355,23 @@ fn a_search_stuck_within_the_goals_tolerance_has_arrived() {
 
 #[test]
 fn searches_that_stick_nearer_the_goal_do_not_use_up_the_replans() {
-    // On the cliff course the plan marks three cells; one of those searches got no nearer
-    // the goal than the one before it. A budget of two such searches is enough (the others
-    // made progress), a budget of one is not.
+    // On the cliff course, with a search budget of 1,000 nodes, the plan marks three cells;
+    // one of those searches got no nearer the goal than the one before it. A budget of two
+    // such searches is enough (the others made progress), a budget of one is not.
     let t = cliff_course();
     let attempt = |max_replans: usize| {
         let mut space = ambler_one_heading(&t);
         let params = PlanParams {
             backoff_cells: 4,
             max_replans,
+            search: SearchParams {
+                stall_nodes: 1_000,
+                ..SearchParams::default()
+            },
+            route: tca_cg_space::RouteParams {
+                shortcut_cells: 0,
+                ..Default::default()
+            },
             ..PlanParams::default()
         };
         plan(

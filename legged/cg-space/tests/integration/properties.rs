@@ -5,6 +5,8 @@ use crate::common;
 use std::sync::{Arc, OnceLock};
 
 use proptest::prelude::*;
+use tca_cg_space::astar::route_cost;
+use tca_cg_space::route::{RouteParams, roadmap, shortcut};
 use tca_cg_space::{Block, CgCell, CgParams, CgRobot, CgSpace, Flood, astar, flood};
 use tca_legged_model::RobotModel;
 
@@ -70,12 +72,41 @@ proptest! {
                 for c in route {
                     prop_assert!(space.is_valid(*c));
                 }
-                // Both are shortest in unit moves.
-                prop_assert_eq!(route.len(), other.len());
+                // The flood's route is shortest in moves; A*'s is the cheapest, turns costing
+                // more than moves in x and y.
+                prop_assert!(route.len() >= other.len());
+                prop_assert!(route_cost(route) <= route_cost(other));
             }
             (None, Flood::Enclosed { .. }) => {}
             (r, f) => prop_assert!(false, "A* {:?} but flood {:?}", r.as_ref().map(Vec::len), f),
         }
+    }
+
+    #[test]
+    fn a_cut_route_holds_together_and_costs_no_more(
+        obstacles in proptest::collection::vec((3.0f64..11.0, 3.0f64..11.0), 0..4),
+        seed in 0u64..1000, ta in 0u16..8, tb in 0u16..8, span in 4usize..80,
+    ) {
+        let t = blocks(&obstacles);
+        let mut space = CgSpace::new(ambler(), &t).unwrap();
+        let g = *space.grid();
+        let from = CgCell::new(15, 15, ta);
+        let to = CgCell::new(g.nx - 16, g.ny - 16, tb);
+        prop_assume!(space.is_valid(from) && space.is_valid(to));
+        let params = RouteParams { seed, shortcut_cells: span, ..RouteParams::default() };
+        let Some(found) = roadmap(&mut space, from, to, &params) else {
+            return Ok(());
+        };
+        let cut = shortcut(&mut space, &found.cells, &params);
+        prop_assert_eq!(cut.first(), Some(&from));
+        prop_assert_eq!(cut.last(), Some(&to));
+        for w in cut.windows(2) {
+            prop_assert_eq!(g.steps_between(w[0], w[1]), 1);
+        }
+        for c in &cut {
+            prop_assert!(space.is_valid(*c));
+        }
+        prop_assert!(route_cost(&cut) <= route_cost(&found.cells));
     }
 
     #[test]
@@ -108,4 +139,29 @@ fn a_region_cap_bounds_the_memory_and_keeps_the_answers() {
     }
     assert!(free.regions_held() > 1);
     assert!(capped.regions_materialised() > free.regions_materialised());
+}
+
+#[test]
+fn a_detour_and_its_turns_are_cut() {
+    let t = blocks(&[]);
+    let mut space = CgSpace::new(ambler(), &t).unwrap();
+    // Up 10 cells, a turn there and back, 15 across, down 10: 35 moves and two turns.
+    let mut detour = Vec::new();
+    detour.extend((15..=25).map(|iy| CgCell::new(15, iy, 0)));
+    detour.push(CgCell::new(15, 25, 1));
+    detour.extend((15..=30).map(|ix| CgCell::new(ix, 25, 0)));
+    detour.extend((15..25).rev().map(|iy| CgCell::new(30, iy, 0)));
+    assert!(detour.iter().all(|c| space.is_valid(*c)));
+    assert_eq!(route_cost(&detour), 35 + 2 * tca_cg_space::astar::TURN_COST);
+    let cut = shortcut(&mut space, &detour, &RouteParams::default());
+    assert_eq!(cut.first(), Some(&CgCell::new(15, 15, 0)));
+    assert_eq!(cut.last(), Some(&CgCell::new(30, 15, 0)));
+    assert_eq!(route_cost(&cut), 15, "straight across: {cut:?}");
+    assert!(cut.iter().all(|c| c.it == 0));
+    // With cutting off, the route is kept as it was.
+    let off = RouteParams {
+        shortcut_cells: 0,
+        ..RouteParams::default()
+    };
+    assert_eq!(shortcut(&mut space, &detour, &off), detour);
 }
