@@ -143,6 +143,10 @@ impl CgSteps {
         params.mark_radius = params.mark_radius.max(2);
         params.max_replans = params.max_replans.max(60);
         params.backoff_cells = params.backoff_cells.max(WALK_BACKOFF_CELLS);
+        // Walks keep the roadmap's routes uncut: with one heading bin there are no turns to
+        // take out, and the shortest routes the cuts make graze the invalid regions, where
+        // the hexapod's and the spider's searches stuck until the replans ran out.
+        params.route.shortcut_cells = 0;
         let lift_m = 3.0 * gait.clearance_m;
         Ok(CgSteps {
             gait: FreeGait::new(model, gait),
@@ -291,10 +295,13 @@ impl CgSteps {
                 .collect(),
             body_z: t.z,
         };
-        // The plan may end on a cell this near the goal; a millimetre less than the walk's
-        // tolerance, so that the walk agrees the robot has arrived.
+        // The plan may end on a cell this near the goal: a millimetre less than the walk's
+        // tolerance, so that the walk agrees the robot has arrived, but at least a cell and
+        // a half, since the last body move carries the body the rest of the way (see
+        // `final_approach`): a goal whose own cell is invalid (the body's underside reaching
+        // past the map's edge there) is then approached from the next valid cell.
         let params = PlanParams {
-            goal_tolerance_m: (tolerance_m - 1e-3).max(0.0),
+            goal_tolerance_m: (tolerance_m - 1e-3).max(1.5 * space.grid().cell_m),
             ..self.params.clone()
         };
         plan_with(
@@ -331,9 +338,11 @@ impl CgSteps {
     }
 
     /// With the plan done (the CG in its last cell) but the body further than `tolerance_m`
-    /// from the goal (a cell wider than the tolerance), the body's move onto the goal
-    /// itself, the feet where they stand; `None` when the body is near enough already or
-    /// the move cannot be made (the walk then reports how far it stopped).
+    /// from the goal (a cell wider than the tolerance, or a goal whose own cell is invalid),
+    /// the body's move onto the goal itself, the feet where they stand, or where some foot
+    /// cannot follow it that far, a step of the free gait toward the goal; `None` when the
+    /// body is near enough already or neither can be made (the walk then reports how far it
+    /// stopped).
     fn final_approach(
         &self,
         state: &GaitState,
@@ -352,8 +361,20 @@ impl CgSteps {
                 new_plan: None,
             }),
             Err(why) => {
-                tracing::debug!(%why, "the body cannot move onto the goal from the plan's last cell");
-                None
+                // Some foot cannot follow the body all the way: a step of the free gait toward
+                // the goal (a body move and one foot re-placed) instead, until the body is
+                // near enough.
+                tracing::debug!(%why, "the body cannot move onto the goal from the plan's last cell; a free-gait step toward it");
+                match self.gait.plan_step(state, &self.view, goal) {
+                    Ok(step) => Some(CgNext {
+                        step,
+                        new_plan: None,
+                    }),
+                    Err(why) => {
+                        tracing::debug!(%why, "no free-gait step toward the goal either");
+                        None
+                    }
+                }
             }
         }
     }
@@ -806,5 +827,68 @@ mod tests {
         assert!(step.new_plan.is_none());
         // Near enough already: nothing to do.
         assert!(steps.final_approach(&state, goal, 0.3).is_none());
+    }
+
+    #[test]
+    fn a_goal_whose_cell_is_invalid_is_planned_to_the_valid_cell_beside_it() {
+        // Toward the map's east edge the body's underside soon reaches past it; the goal in
+        // the first such cell (a walk's tolerance of 5 cm, less than a cell) is planned to
+        // the valid cell before it, for the last move to finish.
+        let (steps, state) = ambler_on_flat();
+        let mut space = steps.space.lock().expect("the space");
+        let grid = *space.grid();
+        let row = grid
+            .cell_of(Point2::new(5.0, 0.0), 0.0)
+            .expect("on the map");
+        let last_valid = (row.ix..grid.nx)
+            .map(|ix| CgCell::new(ix, row.iy, 0))
+            .take_while(|c| space.is_valid(*c))
+            .last()
+            .expect("valid cells east of the start");
+        assert!(last_valid.ix < grid.nx - 1, "the whole row is valid");
+        let past = grid.centre(last_valid.ix + 1, row.iy);
+        let goal = Point2::new(past.x + 0.1, past.y);
+        assert!(!space.is_valid(grid.cell_of(goal, 0.0).expect("on the map")));
+        let executor = Executor::new(&steps, &grid, &state);
+        let plan = steps
+            .plan_from(
+                &mut space,
+                &state,
+                (goal, 0.05),
+                &executor,
+                &mut LocalRoutes,
+            )
+            .expect("a plan to the cell beside the goal");
+        assert_eq!(plan.feet.route.last(), Some(&last_valid));
+    }
+
+    #[test]
+    fn a_goal_the_feet_cannot_follow_the_body_to_is_approached_by_a_free_gait_step() {
+        // The goal 2.5 m ahead: no leg reaches that far with its foot where it stands, so
+        // the last move is a step of the free gait toward the goal.
+        let (steps, state) = ambler_on_flat();
+        let t = state.body.translation.vector;
+        let here = Point2::new(t.x, t.y);
+        let goal = Point2::new(t.x + 2.5, t.y);
+        let target =
+            Isometry3::from_parts(Translation3::new(goal.x, goal.y, t.z), state.body.rotation);
+        assert!(
+            steps
+                .gait
+                .move_body_to(&state, &steps.view, &target)
+                .is_err(),
+            "the body alone cannot move 2.5 m"
+        );
+        let step = steps
+            .final_approach(&state, goal, 0.05)
+            .expect("a free-gait step toward the goal");
+        assert!(step.new_plan.is_none());
+        let end = step.step.end.body.translation.vector;
+        let nearer = (Point2::new(end.x, end.y) - goal).norm();
+        assert!(
+            nearer < (here - goal).norm() - 0.05,
+            "the step ends {nearer:.2} m from the goal"
+        );
+        assert!(step.step.actions.len() > 1, "a body move and a swing");
     }
 }
