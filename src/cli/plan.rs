@@ -837,20 +837,11 @@ fn plan_summary(grid: &tca_cg_space::CgGrid, plan: &tca_cg_space::Plan) -> Strin
         "route of {} cells, {:.2} m; {} foot moves, {} search nodes, {} routes planned, {} cells marked",
         plan.feet.route.len(),
         route_length_m(grid, &plan.feet.route),
-        foot_moves(plan),
+        plan.feet.foot_moves(),
         plan.feet.nodes,
         plan.routes,
         plan.marked.len(),
     )
-}
-
-/// Foot moves of a plan: feet placed, moved or lifted (not the CG's advances).
-fn foot_moves(plan: &tca_cg_space::Plan) -> usize {
-    plan.feet
-        .steps
-        .iter()
-        .filter(|s| !matches!(s, FootStep::Advance { .. }))
-        .count()
 }
 
 fn cg_plan_json(
@@ -895,7 +886,7 @@ fn cg_plan_json(
         "planned": true,
         "route_cells": plan.feet.route.len(),
         "route_length_m": route_length_m(grid, &plan.feet.route),
-        "foot_moves": foot_moves(plan),
+        "foot_moves": plan.feet.foot_moves(),
         "search_nodes": plan.feet.nodes,
         "routes_planned": plan.routes,
         "cells_marked": plan.marked.len(),

@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Point2;
-use tca_cg_space::{CgParams, CgRobot, CgSpace, FootStep, PlanParams, plan};
+use tca_cg_space::{CgParams, CgRobot, CgSpace, PlanParams, plan};
 use tca_legged_model::{IkOptions, RobotModel};
 use tca_robot::HeightField;
 
@@ -56,16 +56,10 @@ fn bench(c: &mut Criterion) {
     let default_seed = PlanParams::default().route.seed;
     let run = || plan_with_seed(default_seed);
     let describe = |p: &tca_cg_space::Plan| {
-        let advances = p
-            .feet
-            .steps
-            .iter()
-            .filter(|s| matches!(s, FootStep::Advance { .. }))
-            .count();
         format!(
             "route {} cells, {} foot moves, {} replans, {} routes",
             p.feet.route.len(),
-            p.feet.steps.len() - advances,
+            p.feet.foot_moves(),
             p.marked.len(),
             p.routes
         )

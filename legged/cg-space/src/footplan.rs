@@ -156,6 +156,14 @@ pub struct FootPlan {
 }
 
 impl FootPlan {
+    /// How many of the steps move or lift a foot (the rest advance the CG).
+    pub fn foot_moves(&self) -> usize {
+        self.steps
+            .iter()
+            .filter(|s| !matches!(s, FootStep::Advance { .. }))
+            .count()
+    }
+
     /// The stances after each step, the start first.
     pub fn stances(&self) -> Vec<Stance> {
         let mut s = self.start.clone();
