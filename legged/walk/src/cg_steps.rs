@@ -355,28 +355,25 @@ impl CgSteps {
         }
         let target =
             Isometry3::from_parts(Translation3::new(goal.x, goal.y, t.z), state.body.rotation);
-        match self.gait.move_body_to(state, &self.view, &target) {
-            Ok(step) => Some(CgNext {
-                step,
-                new_plan: None,
-            }),
+        let step = match self.gait.move_body_to(state, &self.view, &target) {
+            Ok(step) => step,
             Err(why) => {
                 // Some foot cannot follow the body all the way: a step of the free gait toward
                 // the goal (a body move and one foot re-placed) instead, until the body is
                 // near enough.
                 tracing::debug!(%why, "the body cannot move onto the goal from the plan's last cell; a free-gait step toward it");
-                match self.gait.plan_step(state, &self.view, goal) {
-                    Ok(step) => Some(CgNext {
-                        step,
-                        new_plan: None,
-                    }),
-                    Err(why) => {
-                        tracing::debug!(%why, "no free-gait step toward the goal either");
-                        None
-                    }
-                }
+                self.gait
+                    .plan_step(state, &self.view, goal)
+                    .map_err(
+                        |why| tracing::debug!(%why, "no free-gait step toward the goal either"),
+                    )
+                    .ok()?
             }
-        }
+        };
+        Some(CgNext {
+            step,
+            new_plan: None,
+        })
     }
 
     /// Foot-level moves carried out one after another from `state` with the free gait's
@@ -393,11 +390,7 @@ impl CgSteps {
             let plan = self.carry_out(&at, grid, fs)?;
             at = plan.end.clone();
             match &mut whole {
-                Some(step) => {
-                    step.actions.extend(plan.actions.iter().cloned());
-                    step.min_margin_m = step.min_margin_m.min(plan.min_margin_m);
-                    step.end = plan.end;
-                }
+                Some(step) => append_step(step, &plan),
                 None => whole = Some(plan),
             }
         }
@@ -542,9 +535,7 @@ impl<'a> Executor<'a> {
             };
             match &mut pending {
                 Some(q) => {
-                    q.step.actions.extend(move_plan.actions.iter().cloned());
-                    q.step.min_margin_m = q.step.min_margin_m.min(move_plan.min_margin_m);
-                    q.step.end = end.clone();
+                    append_step(&mut q.step, move_plan);
                     q.moves.push(*fs);
                 }
                 None => {
@@ -567,6 +558,14 @@ impl<'a> Executor<'a> {
         }
         Ok(steps)
     }
+}
+
+/// Appends `next` (a move carried out from where `step` ends) to `step`: its actions, the
+/// lower of the two margins, its end.
+fn append_step(step: &mut StepPlan, next: &StepPlan) {
+    step.actions.extend(next.actions.iter().cloned());
+    step.min_margin_m = step.min_margin_m.min(next.min_margin_m);
+    step.end = next.end.clone();
 }
 
 impl MoveCheck for Executor<'_> {
