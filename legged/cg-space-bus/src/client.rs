@@ -629,9 +629,13 @@ impl Shared {
             let module = self.module();
             let ask = module.query_raw(&name, payload.clone(), Some(self.options.query_timeout));
             tokio::pin!(ask);
-            let mut watch = tokio::time::interval(self.options.watch_every);
+            // The first check one period from now: an interval's immediate first tick still
+            // waits for the timer wheel (up to a millisecond), and the query would wait with it.
+            let mut watch = tokio::time::interval_at(
+                tokio::time::Instant::now() + self.options.watch_every,
+                self.options.watch_every,
+            );
             watch.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-            watch.tick().await;
             let answer = loop {
                 tokio::select! {
                     answer = &mut ask => break answer,
