@@ -7,8 +7,9 @@ use std::collections::HashSet;
 
 use nalgebra::Point2;
 use tca_cg_space::{
-    BatchParams, CgCell, CgParams, CgSpace, JoinError, JoinQuery, Joiner, Joins, LocalJoiner,
-    Partition, RouteParams, fingerprint, plan_route, plan_route_batched,
+    BatchParams, BatchedRouteError, CgCell, CgError, CgParams, CgSpace, JoinError, JoinQuery,
+    Joiner, Joins, LocalJoiner, Partition, RouteParams, fingerprint, plan_route,
+    plan_route_batched,
 };
 use tca_legged_model::RobotModel;
 
@@ -237,4 +238,73 @@ fn a_joiner_that_fails_fails_the_plan_with_its_reason() {
         matches!(&e, tca_cg_space::CgError::Joins { reason } if reason.contains("worker 2 died")),
         "{e}"
     );
+}
+
+/// A joiner that answers every query locally and counts its batches.
+struct Batches(usize);
+
+impl Joiner for Batches {
+    fn join(&mut self, space: &mut CgSpace, queries: &[JoinQuery]) -> Result<Joins, JoinError> {
+        self.0 += 1;
+        LocalJoiner.join(space, queries)
+    }
+}
+
+#[test]
+fn an_enclosed_goal_is_reported_by_the_flood_before_any_join() {
+    // The goal in a yard walled in by a ring 1 m thick and 5 m tall, and a flood budget
+    // that takes in the whole yard.
+    let t = common::terrain(0.0, 30.0, -10.0, 10.0, 0.1, |x, y| {
+        let d = (x - 20.0).abs().max(y.abs());
+        if (5.0..6.0).contains(&d) { 5.0 } else { 0.0 }
+    });
+    let mut space = ambler_space(&t);
+    let (s, g) = (cell(&space, 5.0, 0.0), cell(&space, 20.0, 0.0));
+    let params = RouteParams {
+        flood_budget: 20_000,
+        ..RouteParams::default()
+    };
+    let mut joiner = Batches(0);
+    let r = plan_route_batched(
+        &mut space,
+        &mut joiner,
+        s,
+        g,
+        &params,
+        &BatchParams::default(),
+    );
+    assert!(
+        matches!(
+            r,
+            Err(BatchedRouteError::Plan(CgError::Unreachable {
+                enclosed: "goal",
+                ..
+            }))
+        ),
+        "{r:?}"
+    );
+    assert_eq!(joiner.0, 0, "no worker was asked");
+}
+
+#[test]
+fn a_short_route_is_the_floods_whoever_joins() {
+    // Open ground, the goal a few metres off: the flood meets within its budget.
+    let t = common::terrain(0.0, 20.0, -5.0, 5.0, 0.1, |_, _| 0.0);
+    let mut space = ambler_space(&t);
+    let (s, g) = (cell(&space, 4.0, 0.0), cell(&space, 6.0, 0.0));
+    let params = RouteParams::default();
+    let alone = plan_route(&mut ambler_space(&t), s, g, &params).expect("a route");
+    assert_eq!(alone.draws, 0, "the flood found it");
+    let mut joiner = Batches(0);
+    let batched = plan_route_batched(
+        &mut space,
+        &mut joiner,
+        s,
+        g,
+        &params,
+        &BatchParams::default(),
+    )
+    .expect("a route");
+    assert_eq!(batched, alone);
+    assert_eq!(joiner.0, 0, "no worker was asked");
 }
