@@ -5,7 +5,8 @@
 //! plan (the workers' and the planner's own), the robot's tables once.
 //!
 //! Besides criterion's report, prints the medians of runs taken in turn (`CG_BENCH_ROUNDS`,
-//! default 5) and their ratio (5 workers' time / 1 worker's).
+//! default 5), their ratio (5 workers' time / 1 worker's), and how many of the machine's
+//! cores the process kept busy while planning (its CPU time over the wall time).
 
 use std::hint::black_box;
 use std::sync::Arc;
@@ -69,9 +70,23 @@ impl<J: Joiner> Joiner for Timed<J> {
     }
 }
 
+/// The CPU time this process has used, from `/proc/self/stat` (Linux; clock ticks of
+/// 10 ms), or `None` where it cannot be read.
+fn cpu_used() -> Option<Duration> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the command's closing parenthesis: state is the 3rd field, utime the
+    // 14th and stime the 15th.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = fields.get(11)?.parse::<u64>().ok()? + fields.get(12)?.parse::<u64>().ok()?;
+    Some(Duration::from_millis(ticks * 10))
+}
+
 /// One measured plan.
 struct Run {
     took: Duration,
+    /// CPU time of the whole process (planner, central, workers) during the plan.
+    cpu: Option<Duration>,
     waited: Duration,
     route: Route,
     stats: JoinStats,
@@ -111,6 +126,7 @@ impl Setup {
             inner: joiner,
             waited: Duration::ZERO,
         };
+        let cpu_before = cpu_used();
         let began = Instant::now();
         let route = plan_route_batched(
             &mut space,
@@ -122,9 +138,13 @@ impl Setup {
         )
         .expect("a route");
         let took = began.elapsed();
+        let cpu = cpu_used()
+            .zip(cpu_before)
+            .map(|(after, before)| after - before);
         let stats = self.runtime.block_on(joiner.inner.shutdown());
         Run {
             took,
+            cpu,
             waited: joiner.waited,
             route,
             stats,
@@ -196,6 +216,8 @@ fn bench(c: &mut Criterion) {
         .max(1);
     for (what, cap) in [("capped", Some(s.cap)), ("uncapped", None)] {
         let (mut one, mut five) = (Vec::new(), Vec::new());
+        // Wall and CPU time over every run of each configuration, for the cores kept busy.
+        let mut busy = [(Duration::ZERO, Some(Duration::ZERO)); 2];
         let mut shown = false;
         for _ in 0..rounds {
             let a = s.plan(1, cap);
@@ -232,9 +254,23 @@ fn bench(c: &mut Criterion) {
                     );
                 }
             }
+            for (i, run) in [&a, &b].into_iter().enumerate() {
+                busy[i].0 += run.took;
+                busy[i].1 = busy[i].1.zip(run.cpu).map(|(sum, cpu)| sum + cpu);
+            }
             one.push(a.took);
             five.push(b.took);
         }
+        let cores = |(wall, cpu): (Duration, Option<Duration>)| {
+            cpu.map_or("unknown".to_string(), |cpu| {
+                format!("{:.2}", cpu.as_secs_f64() / wall.as_secs_f64())
+            })
+        };
+        eprintln!(
+            "{what}: cores busy while planning (process CPU time / wall time, all runs): 1 worker {}, 5 workers {}",
+            cores(busy[0]),
+            cores(busy[1])
+        );
         let (m1, m5) = (median(one), median(five));
         eprintln!(
             "{what}: median of {rounds}: 1 worker {:.3} s, 5 workers {:.3} s, ratio (5 workers / 1 worker) {:.3}",
