@@ -7,6 +7,10 @@
 //! Besides criterion's report, prints the medians of runs taken in turn (`CG_BENCH_ROUNDS`,
 //! default 5), their ratio (5 workers' time / 1 worker's), and how many of the machine's
 //! cores the process kept busy while planning (its CPU time over the wall time).
+//!
+//! `CG_BENCH_WRITE_TERRAIN=FILE.asc` also writes the terrain, for the same plan on worker
+//! processes: `tca plan cgspace --robot ambler --terrain FILE.asc --from 4,48 --to 92,48
+//! --workers 5 --region-cap 120 --route-only --json` (and `--workers 1`).
 
 use std::hint::black_box;
 use std::sync::Arc;
@@ -155,6 +159,10 @@ impl Setup {
 fn setup() -> Setup {
     let model = RobotModel::builtin("ambler").expect("the Ambler");
     let terrain = terrain();
+    if let Ok(path) = std::env::var("CG_BENCH_WRITE_TERRAIN") {
+        tca_robot::terrain::asc::write_height_field(&path, &terrain).expect("the terrain written");
+        eprintln!("the terrain is in {path}");
+    }
     let robot = Arc::new(CgRobot::new(&model, 0.1, CgParams::default()).expect("tables"));
     let space = CgSpace::new(robot.clone(), &terrain).expect("a space");
     let grid = *space.grid();
