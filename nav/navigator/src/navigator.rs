@@ -187,6 +187,8 @@ pub struct Navigator {
     exploration: Option<Exploration>,
     last_explored: Option<(Point2<f64>, Pose2)>,
     travelled_since_turn_m: f64,
+    /// Distance travelled since the last turn toward a blind path cell.
+    travelled_since_blind_m: f64,
     last_pose: Option<Pose2>,
     /// Where the estimate has stood since, and for how many frames.
     still: Option<(Pose2, usize)>,
@@ -244,6 +246,7 @@ impl Navigator {
             exploration: None,
             last_explored: None,
             travelled_since_turn_m: 0.0,
+            travelled_since_blind_m: f64::INFINITY,
             last_pose: None,
             still: None,
             turns: 0,
@@ -294,6 +297,7 @@ impl Navigator {
     pub fn step(&mut self, estimate: Pose2, changes: &[CellChange]) -> Result<Command, NavError> {
         if let Some(last) = self.last_pose {
             self.travelled_since_turn_m += last.distance(&estimate);
+            self.travelled_since_blind_m += last.distance(&estimate);
         }
         self.last_pose = Some(estimate);
         let here = Point2::new(estimate.x, estimate.y);
@@ -433,7 +437,10 @@ impl Navigator {
         if let Some(cmd) = self.continue_exploration(est) {
             return cmd;
         }
-        if let Some(cell) = self.cell_to_explore(est) {
+        if let Some((cell, blind)) = self.cell_to_explore(est) {
+            if blind {
+                self.travelled_since_blind_m = 0.0;
+            }
             let b = bearing(here, cell);
             let e = self.params.explore_half_angle_rad;
             self.exploration = Some(Exploration {
@@ -469,25 +476,41 @@ impl Navigator {
         None
     }
 
-    /// The first path cell within camera range whose certainty is below 1, if the
-    /// spacing rules allow a turn for it.
-    fn cell_to_explore(&self, est: Pose2) -> Option<Point2<f64>> {
+    /// The path cell to turn and look at, and whether it is a blind one: the first path
+    /// cell within camera range too little known for a danger, if one is due; else the
+    /// first whose certainty is below 1, if the spacing rules allow a turn for it.
+    fn cell_to_explore(&self, est: Pose2) -> Option<(Point2<f64>, bool)> {
         let here = Point2::new(est.x, est.y);
         let l = self.params.explore_spacing_m;
-        let candidate = self.path.iter().skip(1).find_map(|c| {
-            let p = self.cell_point(*c);
-            let d = (p - here).norm();
-            if d > self.params.map_range_m {
-                return None;
-            }
-            let known = self
-                .cells
-                .get(CellIndex::new(c.ix, c.iy))
-                .map_or(0.0, |d| d.certainty);
-            (d >= 0.3 && known < 1.0).then_some(p)
-        })?;
+        // The first path cell in range known less than `below`.
+        let first_below = |below: f64| {
+            self.path.iter().skip(1).find_map(|c| {
+                let p = self.cell_point(*c);
+                let d = (p - here).norm();
+                if d > self.params.map_range_m {
+                    return None;
+                }
+                let known = self
+                    .cells
+                    .get(CellIndex::new(c.ix, c.iy))
+                    .map_or(0.0, |d| d.certainty);
+                (d >= 0.3 && known < below).then_some(p)
+            })
+        };
+        // A path cell too little known for a danger (the plan crosses it blind, at d = 1)
+        // is looked at first, at most once per `explore_spacing_m` travelled: a circle
+        // known only in part can read as flat beside a slope it has not seen.
+        if self.travelled_since_blind_m >= l
+            && let Some(blind) = first_below(self.params.danger.min_certainty)
+            && self
+                .last_explored
+                .is_none_or(|(prev, _)| (blind - prev).norm() >= l)
+        {
+            return Some((blind, true));
+        }
+        let candidate = first_below(1.0)?;
         let Some((prev, _)) = self.last_explored else {
-            return Some(candidate);
+            return Some((candidate, false));
         };
         if (candidate - prev).norm() < l {
             return None;
@@ -497,7 +520,7 @@ impl Navigator {
         (self.travelled_since_turn_m >= l
             || angle >= self.params.explore_half_angle_rad
             || self.replanned_since_turn)
-            .then_some(candidate)
+            .then_some((candidate, false))
     }
 
     fn follow(&self, est: Pose2) -> Command {
