@@ -296,8 +296,9 @@ impl Navigator {
     /// LTM Manager). Returns what to do, or [`PlanError::NoPath`] when the goal is cut off.
     pub fn step(&mut self, estimate: Pose2, changes: &[CellChange]) -> Result<Command, NavError> {
         if let Some(last) = self.last_pose {
-            self.travelled_since_turn_m += last.distance(&estimate);
-            self.travelled_since_blind_m += last.distance(&estimate);
+            let moved = last.distance(&estimate);
+            self.travelled_since_turn_m += moved;
+            self.travelled_since_blind_m += moved;
         }
         self.last_pose = Some(estimate);
         let here = Point2::new(estimate.x, estimate.y);

@@ -252,12 +252,8 @@ impl Joiner for Batches {
 
 #[test]
 fn an_enclosed_goal_is_reported_by_the_flood_before_any_join() {
-    // The goal in a yard walled in by a ring 1 m thick and 5 m tall, and a flood budget
-    // that takes in the whole yard.
-    let t = common::terrain(0.0, 30.0, -10.0, 10.0, 0.1, |x, y| {
-        let d = (x - 20.0).abs().max(y.abs());
-        if (5.0..6.0).contains(&d) { 5.0 } else { 0.0 }
-    });
+    // The goal in the walled yard, and a flood budget that takes in the whole yard.
+    let t = common::walled_yard();
     let mut space = ambler_space(&t);
     let (s, g) = (cell(&space, 5.0, 0.0), cell(&space, 20.0, 0.0));
     let params = RouteParams {

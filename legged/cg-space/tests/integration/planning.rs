@@ -278,12 +278,7 @@ fn after_backing_off_from_where_the_search_stuck_the_plan_still_holds_together()
 
 #[test]
 fn walled_goal_is_reported_unreachable_quickly() {
-    // The goal in a yard walled in by a ring 1 m thick and 5 m tall: taller than the legs
-    // span and than the under-carriage clears.
-    let t = common::terrain(0.0, 30.0, -10.0, 10.0, 0.1, |x, y| {
-        let d = (x - 20.0).abs().max(y.abs());
-        if (5.0..6.0).contains(&d) { 5.0 } else { 0.0 }
-    });
+    let t = common::walled_yard();
     let mut space = ambler_space(&t);
     let began = Instant::now();
     let r = plan(

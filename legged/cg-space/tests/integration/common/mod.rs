@@ -40,3 +40,12 @@ pub fn cliff(height: f64) -> HeightField {
         }
     })
 }
+
+/// Flat ground 30 x 20 m with the goal's yard about (20, 0) walled in by a square ring 1 m
+/// thick and 5 m tall: taller than the legs span and than the under-carriage clears.
+pub fn walled_yard() -> HeightField {
+    terrain(0.0, 30.0, -10.0, 10.0, 0.1, |x, y| {
+        let d = (x - 20.0).abs().max(y.abs());
+        if (5.0..6.0).contains(&d) { 5.0 } else { 0.0 }
+    })
+}
