@@ -618,3 +618,115 @@ impl Navigator {
 fn bearing(from: Point2<f64>, to: Point2<f64>) -> f64 {
     (to.y - from.y).atan2(to.x - from.x)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A navigator on an unknown 2 x 2 m map of 2 cm cells, at (0.2, 1.0) facing east,
+    /// its goal 1.6 m east: the first path runs straight along the row y = 1.0.
+    fn navigator() -> Navigator {
+        let mount = CameraMount {
+            forward_m: 0.1,
+            height_m: 0.3,
+            pitch_down_rad: 0.4,
+        };
+        let params = NavParams::new(DangerParams::paper(0.3), mount, 0.2);
+        Navigator::new(
+            params,
+            Point2::new(0.0, 0.0),
+            0.02,
+            100,
+            100,
+            Pose2::new(0.2, 1.0, 0.0),
+            Point2::new(1.8, 1.0),
+        )
+        .expect("a valid navigator")
+    }
+
+    /// Gives every path cell east of `from_x` up to `to_x` this certainty (danger 0).
+    fn know(nav: &mut Navigator, from_x: f64, to_x: f64, certainty: f64) {
+        for c in nav.path.clone() {
+            let x = nav.cell_point(c).x;
+            if x >= from_x && x < to_x {
+                let slot = nav.cells.get_mut(CellIndex::new(c.ix, c.iy)).unwrap();
+                slot.danger = 0.0;
+                slot.certainty = certainty;
+            }
+        }
+    }
+
+    #[test]
+    fn a_path_cell_planned_blind_is_looked_at_before_a_nearer_partly_known_one() {
+        let mut nav = navigator();
+        // Known in part (enough for a danger) up to x = 0.8 m, blind beyond.
+        know(&mut nav, 0.0, 0.8, 0.6);
+        let here = Pose2::new(0.2, 1.0, 0.0);
+        let (cell, blind) = nav.cell_to_explore(here).expect("a cell to look at");
+        assert!(blind, "the blind cell comes first");
+        assert!(
+            (cell.x - 0.8).abs() < 0.011 && (cell.y - 1.0).abs() < 0.011,
+            "the first blind path cell, not {cell:?}"
+        );
+    }
+
+    #[test]
+    fn without_a_blind_cell_the_first_cell_not_wholly_known_is_looked_at() {
+        let mut nav = navigator();
+        // Wholly known up to 0.7 m, partly known beyond: nothing on the path is blind.
+        know(&mut nav, 0.0, 0.7, 1.0);
+        know(&mut nav, 0.7, 2.0, 0.6);
+        let (cell, blind) = nav
+            .cell_to_explore(Pose2::new(0.2, 1.0, 0.0))
+            .expect("a cell to look at");
+        assert!(!blind);
+        assert!((cell.x - 0.7).abs() < 0.011, "got {cell:?}");
+        // A path wholly known in camera range gives no turn at all.
+        know(&mut nav, 0.0, 2.0, 1.0);
+        assert_eq!(nav.cell_to_explore(Pose2::new(0.2, 1.0, 0.0)), None);
+    }
+
+    #[test]
+    fn blind_turns_come_at_most_once_per_spacing_travelled() {
+        let mut nav = navigator();
+        know(&mut nav, 0.0, 0.8, 0.6);
+        let start = Pose2::new(0.2, 1.0, 0.0);
+        // The first frame turns toward the blind cell at 0.8 m.
+        let Command::Drive { forward_mps, .. } = nav.step(start, &[]).unwrap() else {
+            panic!("not reached yet");
+        };
+        assert_eq!(forward_mps, 0.0, "an exploration turn stands still");
+        assert_eq!(nav.exploration_turns(), 1);
+        assert_eq!(nav.travelled_since_blind_m, 0.0);
+        let (first, _) = nav.last_explored.unwrap();
+        assert!((first.x - 0.8).abs() < 0.011);
+        nav.exploration = None;
+
+        // Farther on, the path is blind from 1.1 m: a cell far enough from the last one
+        // looked at, but only 0.1 m travelled since the blind turn, so no blind turn yet.
+        know(&mut nav, 0.8, 1.1, 0.6);
+        let on = Pose2::new(0.3, 1.0, 0.0);
+        nav.travelled_since_blind_m = 0.1;
+        match nav.cell_to_explore(on) {
+            None => {}
+            Some((cell, blind)) => {
+                assert!(
+                    !blind,
+                    "a blind turn before the spacing was travelled: {cell:?}"
+                );
+            }
+        }
+        // After the spacing, the blind cell at 1.1 m is due.
+        nav.travelled_since_blind_m = nav.params.explore_spacing_m;
+        let (cell, blind) = nav.cell_to_explore(on).expect("a blind cell is due");
+        assert!(blind);
+        assert!((cell.x - 1.1).abs() < 0.011, "got {cell:?}");
+        // A blind cell within the spacing of the last one looked at is not looked at again.
+        nav.last_explored = Some((cell, on));
+        let again = nav.cell_to_explore(on);
+        assert!(
+            again.is_none_or(|(_, blind)| !blind),
+            "the same blind cell twice: {again:?}"
+        );
+    }
+}
