@@ -1,7 +1,8 @@
 //! Same-machine link benchmarks: query round trips and goal throughput through central over
 //! the local link (Unix socket), beside in-process and zenoh tcp loopback, logging on; each
 //! beside raw baselines measured in the same run (a tokio channel round trip, a raw Unix socket
-//! echo round trip).
+//! echo round trip, and the same frame relayed through a second process to a third and back:
+//! the four socket hops of a routed query without central's work).
 //!
 //! Central runs as its own process (`tca central --listen local/... --listen tcp/... --log`),
 //! the echo module as another (`tca module echo`), and the pinger here: three processes, as
@@ -19,7 +20,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use bytes::Bytes;
-use criterion::{Criterion, criterion_group, criterion_main};
+use criterion::{Criterion, criterion_group};
 use tca_central::StartOptions;
 use tca_module::{Connector, Module};
 use tca_ping::echo::{self, Ping};
@@ -29,6 +30,8 @@ mod goal_flood;
 use goal_flood::GoalCount;
 #[path = "common/on_worker.rs"]
 mod on_worker;
+#[path = "common/raw_relay.rs"]
+mod raw_relay;
 use on_worker::{samples_on_worker, time_on_worker};
 use tokio::runtime::Runtime;
 use tokio::sync::mpsc;
@@ -197,6 +200,40 @@ fn raw_unix_socket(c: &mut Criterion, rt: &Runtime) {
     });
 }
 
+/// Baseline: the 20-byte frame through a relay process to an echo process and back, four
+/// socket hops across three processes as a routed query makes, with none of central's work
+/// (see `common/raw_relay.rs`). Criterion's figure, then p50/p99.
+fn raw_relay_round_trip(c: &mut Criterion, rt: &Runtime) {
+    let relay = raw_relay::RawRelay::start();
+    let socket = relay.socket.clone();
+    let client = rt.block_on(async move { raw_relay::connect(&socket).await });
+    let client = Arc::new(tokio::sync::Mutex::new(client));
+    let trip = move || {
+        let client = client.clone();
+        async move {
+            use tokio::io::{AsyncReadExt, AsyncWriteExt};
+            let mut s = client.lock().await;
+            let mut frame = [0u8; raw_relay::FRAME];
+            frame[..4].copy_from_slice(&16u32.to_le_bytes());
+            s.write_all(&frame).await.unwrap();
+            s.read_exact(&mut frame).await.unwrap();
+            frame
+        }
+    };
+    let name = "baseline/unix_socket_relay_round_trip";
+    let timed = trip.clone();
+    c.bench_function(name, |b| {
+        b.iter_custom(|iters| time_on_worker(rt, iters, timed.clone()))
+    });
+    let mut samples = samples_on_worker(rt, PERCENTILE_SAMPLES, trip);
+    let report = tca_ping::report(&mut samples);
+    eprintln!(
+        "{name}: {} samples: min {:.1} µs, p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs",
+        report.n, report.min_us, report.p50_us, report.p99_us, report.max_us
+    );
+    drop(relay);
+}
+
 /// Times routed query round trips from `pinger` (criterion), then prints p50/p99.
 fn routed_query(c: &mut Criterion, rt: &Runtime, name: &str, pinger: &Module) {
     c.bench_function(name, |b| {
@@ -278,6 +315,7 @@ fn benches(c: &mut Criterion) {
     raw_unix_socket(c, &rt);
     inproc_query(c, &rt);
     let central = central_process();
+    raw_relay_round_trip(c, &rt);
     cross_process_query(
         c,
         &rt,
@@ -327,4 +365,12 @@ criterion_group! {
     config = Criterion::default().measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
     targets = benches
 }
-criterion_main!(local_link_benches);
+
+fn main() {
+    // A copy of this executable started as the raw relay baseline's relay or echo.
+    if raw_relay::run_role_if_asked() {
+        return;
+    }
+    local_link_benches();
+    Criterion::default().configure_from_args().final_summary();
+}

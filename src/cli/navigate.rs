@@ -57,7 +57,8 @@ pub(crate) struct NavigateArgs {
     #[arg(long, value_name = "M", conflicts_with = "connect")]
     lookahead: Option<f64>,
     /// Line of sight, m: steer to the farthest path cell within this distance that a
-    /// straight line reaches over ground no worse than the path's own (default 0: off).
+    /// straight line reaches over ground no worse and no less known than the path's own
+    /// (default 0.6; 0: off, follow the grid path).
     #[arg(long, value_name = "M", conflicts_with = "connect")]
     sight: Option<f64>,
     /// Clearance kept from untraversable cells when planning, m (default 0.06): a cell this

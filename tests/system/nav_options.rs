@@ -33,9 +33,9 @@ fn beta_lookahead_sight_and_clearance_change_the_run_and_bad_values_are_refused(
     let default = run(&[]);
     let heavy = run(&["--beta", "8"]);
     let long = run(&["--lookahead", "0.4"]);
-    let sight = run(&["--sight", "0.6"]);
+    let no_sight = run(&["--sight", "0"]);
     let wide = run(&["--clearance", "0.15"]);
-    for r in [&default, &heavy, &long, &sight, &wide] {
+    for r in [&default, &heavy, &long, &no_sight, &wide] {
         assert_eq!(r["untraversable_frames"], 0, "{r}");
         assert_eq!(r["reached"], true, "{r}");
     }
@@ -46,6 +46,10 @@ fn beta_lookahead_sight_and_clearance_change_the_run_and_bad_values_are_refused(
     assert_ne!(
         default["path"], long["path"],
         "--lookahead 0.4 drove the same path"
+    );
+    assert_ne!(
+        default["path"], no_sight["path"],
+        "--sight 0 drove the same path"
     );
     assert_ne!(
         default["path"], wide["path"],

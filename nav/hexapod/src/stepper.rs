@@ -325,7 +325,10 @@ impl Stepper {
             .move_body_to(state, &self.view, &self.body_pose(state, &next))
         {
             Ok(plan) => return Next::Move(plan),
-            Err(e) => why.push(format!("the body move: {e}")),
+            Err(e) => {
+                tracing::debug!(error = %e, "the body move toward the target is refused");
+                why.push(format!("the body move: {e}"))
+            }
         }
         for &(leg, off) in &offsets {
             if off > p.max_foot_offset_m || off < 0.2 * p.max_foot_offset_m {

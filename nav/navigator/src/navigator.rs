@@ -102,8 +102,9 @@ pub struct NavParams {
     pub lookahead_m: f64,
     /// Line of sight along the path, m (0: off). When above 0 the follower steers to the
     /// farthest path cell within this distance that a straight line reaches over cells no
-    /// more dangerous than the path's own up to there (and no nearer an untraversable cell
-    /// than the path comes), so the grid path's corners are cut where the ground allows it.
+    /// more dangerous and no less known than the path's own up to there (and no nearer an
+    /// untraversable cell than the path comes), so the grid path's corners are cut where
+    /// the ground allows it and is known to. 0.6 by default.
     pub sight_m: f64,
     /// Time between frames, s: each command holds for one frame.
     pub frame_period_s: f64,
@@ -140,7 +141,7 @@ impl NavParams {
             max_turn_rps: 0.6,
             turn_gain: 1.5,
             lookahead_m: 0.12,
-            sight_m: 0.0,
+            sight_m: 0.6,
             frame_period_s: 0.25,
             matcher: None,
             stall_frames: 60,
@@ -565,7 +566,9 @@ impl Navigator {
 
 impl Navigator {
     /// The farthest path cell within `sight_m` that a straight line from `here` reaches
-    /// over ground no worse than the path's own up to that cell.
+    /// over ground no worse and no less known than the path's own up to that cell: a cut
+    /// corner never crosses ground seen less well than the path it shortens (a cell planned
+    /// at d = 1 because it is blind is not the same as one seen to be barely traversable).
     fn farthest_in_sight(&self, here: Point2<f64>) -> Option<Point2<f64>> {
         let sight = self.params.sight_m;
         if sight <= 0.0 {
@@ -574,18 +577,20 @@ impl Navigator {
         let nx = self.cells.nx();
         let near = |c: CellIndex| self.near_untraversable[c.iy * nx + c.ix] > 0;
         let mut worst = 0.0f64;
+        let mut least_known = 1.0f64;
         let mut path_near = false;
         let mut best = None;
         for c in self.path.iter().skip(1) {
             let ci = CellIndex::new(c.ix, c.iy);
             worst = worst.max(self.planned_danger(ci));
+            least_known = least_known.min(self.cells.get(ci).map_or(0.0, |k| k.certainty));
             path_near |= near(ci);
             let p = self.cell_point(*c);
             let d = (p - here).norm();
             if d > sight {
                 break;
             }
-            if self.line_clear(here, p, worst, path_near, &near) {
+            if self.line_clear(here, p, worst, least_known, path_near, &near) {
                 best = Some(p);
             }
         }
@@ -593,12 +598,14 @@ impl Navigator {
     }
 
     /// Whether every cell on the segment `a`-`b` is finite, no more dangerous than
-    /// `worst`, and (unless `near_allowed`) clear of untraversable cells.
+    /// `worst`, known at least `least_known`, and (unless `near_allowed`) clear of
+    /// untraversable cells.
     fn line_clear(
         &self,
         a: Point2<f64>,
         b: Point2<f64>,
         worst: f64,
+        least_known: f64,
         near_allowed: bool,
         near: &dyn Fn(CellIndex) -> bool,
     ) -> bool {
@@ -610,7 +617,11 @@ impl Navigator {
                 return false;
             };
             let d = self.planned_danger(c);
-            d.is_finite() && d <= worst + 1e-9 && (near_allowed || !near(c))
+            let known = self.cells.get(c).map_or(0.0, |k| k.certainty);
+            known >= least_known - 1e-9
+                && d.is_finite()
+                && d <= worst + 1e-9
+                && (near_allowed || !near(c))
         })
     }
 }
@@ -728,5 +739,40 @@ mod tests {
             again.is_none_or(|(_, blind)| !blind),
             "the same blind cell twice: {again:?}"
         );
+    }
+    #[test]
+    fn a_cut_corner_never_crosses_ground_less_known_than_the_path() {
+        let mut nav = navigator();
+        // An L-shaped path: 0.3 m east, then 0.3 m north, every cell of it seen and
+        // barely traversable (planned d = 1), so danger alone would let a straight line cross
+        // the blind corner (also planned at d = 1).
+        let (x0, y0) = (10usize, 50usize);
+        let mut path: Vec<Cell> = (0..=15).map(|i| Cell::new(x0 + i, y0)).collect();
+        path.extend((1..=15).map(|i| Cell::new(x0 + 15, y0 + i)));
+        for c in &path {
+            let slot = nav.cells.get_mut(CellIndex::new(c.ix, c.iy)).unwrap();
+            slot.danger = 1.0;
+            slot.certainty = 1.0;
+        }
+        nav.path = path;
+        let here = nav.cell_point(Cell::new(x0, y0));
+        let corner = nav.cell_point(Cell::new(x0 + 15, y0));
+        let beyond = nav
+            .farthest_in_sight(here)
+            .expect("the straight run is in sight");
+        assert!(
+            (beyond - corner).norm() < 1e-9,
+            "the line stops at the corner, not at {beyond:?}"
+        );
+        // Once the corner's inside is seen (as barely traversable), the corner is cut.
+        for ix in x0..=x0 + 15 {
+            for iy in y0..=y0 + 15 {
+                let slot = nav.cells.get_mut(CellIndex::new(ix, iy)).unwrap();
+                slot.danger = 1.0;
+                slot.certainty = 1.0;
+            }
+        }
+        let cut = nav.farthest_in_sight(here).expect("a cell in sight");
+        assert!(cut.y > corner.y + 0.1, "the corner is cut: {cut:?}");
     }
 }

@@ -194,6 +194,12 @@ pub fn run(
             && !truth.cell(c).is_traversable()
         {
             report.untraversable_frames += 1;
+            tracing::debug!(
+                frame = report.frames,
+                x = pose.x,
+                y = pose.y,
+                "the robot stands in a cell untraversable on the true terrain"
+            );
         }
         let t0 = Instant::now();
         let attitude = base.attitude();
