@@ -1,8 +1,9 @@
-//! The wheeled base finds its way around the hill (the ramps course, longer, is run by
-//! `tca navigate`).
+//! The wheeled base finds its way around the hill, and over the ramps on a seed whose cut
+//! corner once crossed ground never seen onto a ramp's raised side (every ramps seed is run
+//! by `tca navigate --terrain ramps --seeds 8`).
 
 use tca_nav_navigator::{
-    Course, RunOptions, WheeledBase, WheeledParams, hill_course, run, wheeled_params,
+    Course, RunOptions, WheeledBase, WheeledParams, hill_course, ramps_course, run, wheeled_params,
 };
 
 fn drive(course: &Course, seed: u64) -> tca_nav_navigator::RunReport {
@@ -12,7 +13,7 @@ fn drive(course: &Course, seed: u64) -> tca_nav_navigator::RunReport {
         goal_offset: course.goal_offset,
         drift: 0.0125,
         seed,
-        max_frames: 1500,
+        max_frames: 3000,
     };
     let (report, nav) = run(&course.terrain, &mut base, wheeled_params(), &opts).unwrap();
     if std::env::var_os("NAV_PICTURE").is_some() {
@@ -66,6 +67,11 @@ fn the_wheeled_base_goes_around_the_hill() {
     check(&hill_course().unwrap(), 1);
 }
 
+#[test]
+fn the_wheeled_base_crosses_the_platform_by_its_ramps() {
+    check(&ramps_course().unwrap(), 2);
+}
+
 /// A base that is told to move and never does (stuck on something it cannot cross).
 struct Stuck {
     pose: tca_nav_navigator::Pose2,
@@ -104,7 +110,7 @@ fn a_base_that_never_moves_ends_the_run_with_a_reason_after_the_stall_frames() {
         goal_offset: course.goal_offset,
         drift: 0.0125,
         seed: 1,
-        max_frames: 1500,
+        max_frames: 3000,
     };
     let params = wheeled_params();
     let stall = params.stall_frames;
