@@ -37,6 +37,7 @@ fn beta_lookahead_sight_and_clearance_change_the_run_and_bad_values_are_refused(
     let wide = run(&["--clearance", "0.15"]);
     for r in [&default, &heavy, &long, &no_sight, &wide] {
         assert_eq!(r["untraversable_frames"], 0, "{r}");
+        assert_eq!(r["untraversable_at"], serde_json::json!([]), "{r}");
         assert_eq!(r["reached"], true, "{r}");
     }
     assert_ne!(

@@ -142,7 +142,7 @@ pub async fn run_with(
     ) {
         path.push([sim.pose.x_m, sim.pose.y_m]);
     }
-    let untraversable_frames = path
+    let untraversable_at: Vec<[f64; 2]> = path
         .iter()
         .filter(|p| {
             truth
@@ -150,7 +150,8 @@ pub async fn run_with(
                 .cell_at(Point2::new(p[0], p[1]))
                 .is_some_and(|c| !truth.cell(c).is_traversable())
         })
-        .count() as u64;
+        .copied()
+        .collect();
     let (reached, reason) = match outcome {
         TaskOutcome::Achieved => (true, "goal reached by the estimate".to_string()),
         TaskOutcome::Failed(r) => (false, r),
@@ -181,7 +182,8 @@ pub async fn run_with(
         },
         collisions: sim.collisions,
         falls: sim.falls,
-        untraversable_frames,
+        untraversable_frames: untraversable_at.len() as u64,
+        untraversable_at,
         true_map_path_m: true_path,
         path,
     };

@@ -63,6 +63,8 @@ pub struct RunReport {
     pub falls: u64,
     /// Frames in which the robot's true cell is untraversable on the true terrain.
     pub untraversable_frames: u64,
+    /// Where the robot truly stood in each of those frames, `[x, y]` m, world frame.
+    pub untraversable_at: Vec<[f64; 2]>,
     /// Length of the D* Lite path on the true danger map, m (`None` if there is none).
     pub true_map_path_m: Option<f64>,
 }
@@ -182,6 +184,7 @@ pub fn run(
         collisions: 0,
         falls: 0,
         untraversable_frames: 0,
+        untraversable_at: Vec::new(),
         true_map_path_m: true_path,
     };
     let mut computing = 0.0;
@@ -194,12 +197,7 @@ pub fn run(
             && !truth.cell(c).is_traversable()
         {
             report.untraversable_frames += 1;
-            tracing::debug!(
-                frame = report.frames,
-                x = pose.x,
-                y = pose.y,
-                "the robot stands in a cell untraversable on the true terrain"
-            );
+            report.untraversable_at.push([pose.x, pose.y]);
         }
         let t0 = Instant::now();
         let attitude = base.attitude();
