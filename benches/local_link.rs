@@ -166,12 +166,12 @@ fn raw_tokio(c: &mut Criterion, rt: &Runtime) {
 
 /// Baseline: a 4-byte length and a 16-byte frame written to a Unix socket, echoed back by a
 /// blocking thread, read back by a tokio task: one round trip of the local link's wire, with
-/// no central.
+/// no central. Criterion's figure, then p50/p99.
 fn raw_unix_socket(c: &mut Criterion, rt: &Runtime) {
     let (server, client) = std::os::unix::net::UnixStream::pair().unwrap();
     std::thread::spawn(move || {
         let mut server = server;
-        let mut buf = [0u8; 20];
+        let mut buf = [0u8; raw_relay::FRAME];
         while server.read_exact(&mut buf).is_ok() {
             if server.write_all(&buf).is_err() {
                 return;
@@ -181,23 +181,19 @@ fn raw_unix_socket(c: &mut Criterion, rt: &Runtime) {
     client.set_nonblocking(true).unwrap();
     let client = rt.block_on(async { tokio::net::UnixStream::from_std(client).unwrap() });
     let client = Arc::new(tokio::sync::Mutex::new(client));
-    c.bench_function("baseline/unix_socket_echo_round_trip", |b| {
-        b.iter_custom(|iters| {
-            let client = client.clone();
-            time_on_worker(rt, iters, move || {
-                let client = client.clone();
-                async move {
-                    use tokio::io::{AsyncReadExt, AsyncWriteExt};
-                    let mut s = client.lock().await;
-                    let mut frame = [0u8; 20];
-                    frame[..4].copy_from_slice(&16u32.to_le_bytes());
-                    s.write_all(&frame).await.unwrap();
-                    s.read_exact(&mut frame).await.unwrap();
-                    frame
-                }
-            })
-        })
+    round_trips(c, rt, "baseline/unix_socket_echo_round_trip", move || {
+        frame_trip(client.clone())
     });
+}
+
+/// One round trip of a 20-byte frame (a 4-byte length and 16 bytes) over `client`.
+async fn frame_trip(client: Arc<tokio::sync::Mutex<tokio::net::UnixStream>>) {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let mut s = client.lock().await;
+    let mut frame = [0u8; raw_relay::FRAME];
+    frame[..4].copy_from_slice(&16u32.to_le_bytes());
+    s.write_all(&frame).await.unwrap();
+    s.read_exact(&mut frame).await.unwrap();
 }
 
 /// Baseline: the 20-byte frame through a relay process to an echo process and back, four
@@ -208,48 +204,32 @@ fn raw_relay_round_trip(c: &mut Criterion, rt: &Runtime) {
     let socket = relay.socket.clone();
     let client = rt.block_on(async move { raw_relay::connect(&socket).await });
     let client = Arc::new(tokio::sync::Mutex::new(client));
-    let trip = move || {
-        let client = client.clone();
-        async move {
-            use tokio::io::{AsyncReadExt, AsyncWriteExt};
-            let mut s = client.lock().await;
-            let mut frame = [0u8; raw_relay::FRAME];
-            frame[..4].copy_from_slice(&16u32.to_le_bytes());
-            s.write_all(&frame).await.unwrap();
-            s.read_exact(&mut frame).await.unwrap();
-            frame
-        }
-    };
-    let name = "baseline/unix_socket_relay_round_trip";
-    let timed = trip.clone();
-    c.bench_function(name, |b| {
-        b.iter_custom(|iters| time_on_worker(rt, iters, timed.clone()))
+    round_trips(c, rt, "baseline/unix_socket_relay_round_trip", move || {
+        frame_trip(client.clone())
     });
-    let mut samples = samples_on_worker(rt, PERCENTILE_SAMPLES, trip);
-    let report = tca_ping::report(&mut samples);
-    eprintln!(
-        "{name}: {} samples: min {:.1} µs, p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs",
-        report.n, report.min_us, report.p50_us, report.p99_us, report.max_us
-    );
     drop(relay);
 }
 
 /// Times routed query round trips from `pinger` (criterion), then prints p50/p99.
 fn routed_query(c: &mut Criterion, rt: &Runtime, name: &str, pinger: &Module) {
+    let pinger = pinger.clone();
+    round_trips(c, rt, name, move || {
+        let pinger = pinger.clone();
+        async move { pinger.query(&ping()).await.unwrap() }
+    });
+}
+
+/// Times round trips of `trip` (criterion, on a runtime worker), then prints p50/p99 over
+/// [`PERCENTILE_SAMPLES`].
+fn round_trips<F, Fut>(c: &mut Criterion, rt: &Runtime, name: &str, trip: F)
+where
+    F: FnMut() -> Fut + Clone + Send + 'static,
+    Fut: std::future::Future + Send + 'static,
+{
     c.bench_function(name, |b| {
-        b.iter_custom(|iters| {
-            let pinger = pinger.clone();
-            time_on_worker(rt, iters, move || {
-                let pinger = pinger.clone();
-                async move { pinger.query(&ping()).await.unwrap() }
-            })
-        })
+        b.iter_custom(|iters| time_on_worker(rt, iters, trip.clone()))
     });
-    let asker = pinger.clone();
-    let mut samples = samples_on_worker(rt, PERCENTILE_SAMPLES, move || {
-        let asker = asker.clone();
-        async move { asker.query(&ping()).await.unwrap() }
-    });
+    let mut samples = samples_on_worker(rt, PERCENTILE_SAMPLES, trip);
     let report = tca_ping::report(&mut samples);
     eprintln!(
         "{name}: {} samples: min {:.1} µs, p50 {:.1} µs, p99 {:.1} µs, max {:.1} µs",

@@ -430,6 +430,11 @@ impl Navigator {
         set
     }
 
+    /// The known fraction of a cell's circle (0 off the map).
+    fn certainty(&self, c: CellIndex) -> f64 {
+        self.cells.get(c).map_or(0.0, |k| k.certainty)
+    }
+
     fn cell_point(&self, c: Cell) -> Point2<f64> {
         self.cells.cell_center(CellIndex::new(c.ix, c.iy))
     }
@@ -492,10 +497,7 @@ impl Navigator {
                 if d > self.params.map_range_m {
                     return None;
                 }
-                let known = self
-                    .cells
-                    .get(CellIndex::new(c.ix, c.iy))
-                    .map_or(0.0, |d| d.certainty);
+                let known = self.certainty(CellIndex::new(c.ix, c.iy));
                 (d >= 0.3 && known < below).then_some(p)
             })
         };
@@ -583,7 +585,7 @@ impl Navigator {
         for c in self.path.iter().skip(1) {
             let ci = CellIndex::new(c.ix, c.iy);
             worst = worst.max(self.planned_danger(ci));
-            least_known = least_known.min(self.cells.get(ci).map_or(0.0, |k| k.certainty));
+            least_known = least_known.min(self.certainty(ci));
             path_near |= near(ci);
             let p = self.cell_point(*c);
             let d = (p - here).norm();
@@ -617,7 +619,7 @@ impl Navigator {
                 return false;
             };
             let d = self.planned_danger(c);
-            let known = self.cells.get(c).map_or(0.0, |k| k.certainty);
+            let known = self.certainty(c);
             known >= least_known - 1e-9
                 && d.is_finite()
                 && d <= worst + 1e-9
