@@ -65,6 +65,11 @@ pub(crate) struct NavigateArgs {
     /// close to one is planned as barely traversable, a margin for drift and tracking error.
     #[arg(long, value_name = "M", conflicts_with = "connect")]
     clearance: Option<f64>,
+    /// Farthest depth-image point put into the terrain map, m (default 2.2): farther
+    /// points see more of the way ahead but carry stereo's range noise, which grows with
+    /// the square of the distance.
+    #[arg(long, value_name = "M", conflicts_with = "connect")]
+    map_range: Option<f64>,
     /// Danger parameters file (TOML) instead of the robot's own.
     #[arg(long)]
     danger: Option<PathBuf>,
@@ -234,6 +239,14 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
             bail!("--sight {sight} is not valid; give a distance in metres of at least 0 (0: off)");
         }
         params.sight_m = sight;
+    }
+    if let Some(range) = args.map_range {
+        if !(range.is_finite() && range > 0.0) {
+            bail!(
+                "--map-range {range} is not valid; give a distance in metres above 0 (the default is 2.2)"
+            );
+        }
+        params.map_range_m = range;
     }
     if let Some(clearance) = args.clearance {
         if !(clearance.is_finite() && clearance >= 0.0) {

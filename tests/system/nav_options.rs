@@ -1,5 +1,5 @@
-//! `tca navigate`'s planning and following options: `--beta`, `--lookahead`, `--sight` and
-//! `--clearance` change the run (and the true-map path it is judged against), and values that
+//! `tca navigate`'s planning and following options: `--beta`, `--lookahead`, `--sight`,
+//! `--clearance` and `--map-range` change the run (and the true-map path it is judged against), and values that
 //! cannot work are refused saying what to give.
 
 use crate::common::*;
@@ -10,7 +10,7 @@ fn report(stdout: &str, stderr: &str) -> serde_json::Value {
 }
 
 #[test]
-fn beta_lookahead_sight_and_clearance_change_the_run_and_bad_values_are_refused() {
+fn planning_and_following_options_change_the_run_and_bad_values_are_refused() {
     let run = |extra: &[&str]| {
         let mut args = vec![
             "navigate",
@@ -35,7 +35,8 @@ fn beta_lookahead_sight_and_clearance_change_the_run_and_bad_values_are_refused(
     let long = run(&["--lookahead", "0.4"]);
     let no_sight = run(&["--sight", "0"]);
     let wide = run(&["--clearance", "0.15"]);
-    for r in [&default, &heavy, &long, &no_sight, &wide] {
+    let near = run(&["--map-range", "1.0"]);
+    for r in [&default, &heavy, &long, &no_sight, &wide, &near] {
         assert_eq!(r["untraversable_frames"], 0, "{r}");
         assert_eq!(r["untraversable_at"], serde_json::json!([]), "{r}");
         assert_eq!(r["reached"], true, "{r}");
@@ -57,6 +58,10 @@ fn beta_lookahead_sight_and_clearance_change_the_run_and_bad_values_are_refused(
         "--clearance 0.15 drove the same path"
     );
     assert_ne!(
+        default["path"], near["path"],
+        "--map-range 1.0 drove the same path"
+    );
+    assert_ne!(
         default["true_map_path_m"], heavy["true_map_path_m"],
         "the true-map path is planned with the same beta"
     );
@@ -66,6 +71,7 @@ fn beta_lookahead_sight_and_clearance_change_the_run_and_bad_values_are_refused(
         (vec!["--lookahead", "0"], "--lookahead 0 is not valid"),
         (vec!["--sight=-0.5"], "--sight -0.5 is not valid"),
         (vec!["--clearance=-0.1"], "--clearance -0.1 is not valid"),
+        (vec!["--map-range", "0"], "--map-range 0 is not valid"),
     ] {
         let mut all = vec!["navigate", "--terrain", "hill", "--direct"];
         all.extend_from_slice(&args);

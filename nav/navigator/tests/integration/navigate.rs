@@ -1,6 +1,7 @@
 //! The wheeled base finds its way around the hill, and over the ramps on a seed whose cut
-//! corner once crossed ground never seen onto a ramp's raised side (every ramps seed is run
-//! by `tca navigate --terrain ramps --seeds 8`).
+//! corner once crossed ground never seen onto a ramp's raised side and on one that, seeing
+//! only 1.6 m ahead, wandered north along the platform (every ramps seed is run by
+//! `tca navigate --terrain ramps --seeds 8`).
 
 use tca_nav_navigator::{
     Course, RunOptions, WheeledBase, WheeledParams, hill_course, ramps_course, run, wheeled_params,
@@ -70,6 +71,11 @@ fn the_wheeled_base_goes_around_the_hill() {
 #[test]
 fn the_wheeled_base_crosses_the_platform_by_its_ramps() {
     check(&ramps_course().unwrap(), 2);
+}
+
+#[test]
+fn the_wheeled_base_sees_far_enough_not_to_wander_along_the_platform() {
+    check(&ramps_course().unwrap(), 1);
 }
 
 /// A base that is told to move and never does (stuck on something it cannot cross).
