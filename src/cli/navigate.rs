@@ -33,10 +33,11 @@ pub(crate) struct NavigateArgs {
     #[arg(long)]
     terrain: String,
     /// Start pose X,Y[,YAW] in metres and radians (the built-in course's by default).
-    #[arg(long, value_name = "X,Y[,YAW]")]
+    #[arg(long, value_name = "X,Y[,YAW]", allow_hyphen_values = true)]
     start: Option<String>,
-    /// Goal DX,DY: metres east and north of the start (the built-in course's by default).
-    #[arg(long, value_name = "DX,DY")]
+    /// Goal DX,DY: metres east and north of the start, negative for west or south (the
+    /// built-in course's by default).
+    #[arg(long, value_name = "DX,DY", allow_hyphen_values = true)]
     goal: Option<String>,
     /// Odometry drift, percent of the distance travelled.
     #[arg(long, default_value_t = 1.25)]
@@ -71,7 +72,7 @@ pub(crate) struct NavigateArgs {
     #[arg(long, value_name = "M", conflicts_with = "connect")]
     map_range: Option<f64>,
     /// Danger parameters file (TOML) instead of the robot's own.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "connect")]
     danger: Option<PathBuf>,
     /// Frames before giving up.
     #[arg(long, default_value_t = 3000)]

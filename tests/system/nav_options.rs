@@ -36,6 +36,16 @@ fn planning_and_following_options_change_the_run_and_bad_values_are_refused() {
     let no_sight = run(&["--sight", "0"]);
     let wide = run(&["--clearance", "0.15"]);
     let near = run(&["--map-range", "1.0"]);
+    // A goal west and north of the start, given as `--goal -DX,DY` without `=`.
+    let west = run(&["--goal", "-0.3,0.2"]);
+    assert_eq!(west["reached"], true, "{west}");
+    let end = west["path"].as_array().and_then(|p| p.last()).cloned();
+    let end = end.unwrap_or_else(|| panic!("no path: {west}"));
+    let (x, y) = (end[0].as_f64().unwrap(), end[1].as_f64().unwrap());
+    assert!(
+        (x - 0.25).hypot(y - 1.3) < 0.1,
+        "ended at ({x}, {y}), not 0.3 m west and 0.2 m north of the start: {west}"
+    );
     for r in [&default, &heavy, &long, &no_sight, &wide, &near] {
         assert_eq!(r["untraversable_frames"], 0, "{r}");
         assert_eq!(r["untraversable_at"], serde_json::json!([]), "{r}");
@@ -92,4 +102,21 @@ fn planning_and_following_options_change_the_run_and_bad_values_are_refused() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--beta") && err.contains("--connect"), "{err}");
+    // Modules in other processes keep their own danger files: one given here would only
+    // change how the run is judged, so it is refused.
+    let out = tca_output(&[
+        "navigate",
+        "--terrain",
+        "hill",
+        "--danger",
+        "nav/danger-map/robots/wheeled.toml",
+        "--connect",
+        "tcp/127.0.0.1:1",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--danger") && err.contains("--connect"),
+        "{err}"
+    );
 }

@@ -15,7 +15,10 @@ use tca_nav_danger_map::CellDanger;
 use tca_nav_messages::{
     AcquireDepth, DangerMapQuery, FrameOutcome, InsertDepth, NavFrame, Navigate, SimStatus,
 };
-use tca_nav_navigator::{RunOptions, RunReport, true_danger_map, true_map_path_m};
+use tca_nav_navigator::{
+    RunOptions, RunReport, last_replanned_path, true_danger_map, true_map_path_m,
+    untraversable_along,
+};
 use tca_robot::Grid;
 
 use crate::convert::grid_of;
@@ -142,16 +145,7 @@ pub async fn run_with(
     ) {
         path.push([sim.pose.x_m, sim.pose.y_m]);
     }
-    let untraversable_at: Vec<[f64; 2]> = path
-        .iter()
-        .filter(|p| {
-            truth
-                .cells()
-                .cell_at(Point2::new(p[0], p[1]))
-                .is_some_and(|c| !truth.cell(c).is_traversable())
-        })
-        .copied()
-        .collect();
+    let untraversable_at = untraversable_along(&truth, &path);
     let (reached, reason) = match outcome {
         TaskOutcome::Achieved => (true, "goal reached by the estimate".to_string()),
         TaskOutcome::Failed(r) => (false, r),
@@ -170,7 +164,7 @@ pub async fn run_with(
             .iter()
             .map(|f| [f.estimate.x_m, f.estimate.y_m])
             .collect(),
-        planned_path: frames.last().map(|f| f.path.clone()).unwrap_or_default(),
+        planned_path: last_replanned_path(frames.iter().map(|f| (f.replans, f.path.as_slice()))),
         replans: frames.last().map_or(0, |f| f.replans),
         exploration_turns: frames.last().map_or(0, |f| f.exploration_turns),
         registrations: frames.last().map_or(0, |f| f.registrations),

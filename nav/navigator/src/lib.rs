@@ -11,8 +11,10 @@
 //! 3. changed dangers go to D* Lite; if any changed cell is on or next to the planned
 //!    path, the path is replanned (counted in [`Navigator::replans`]);
 //! 4. motion control: an exploration turn (±ε around the bearing of a path cell within
-//!    camera range whose certainty is below 1, under the paper's spacing rules), or the
-//!    proportional follower toward a point ahead on the path.
+//!    `map_range_m` whose certainty is below 1, under the paper's spacing rules, or of
+//!    one too little known for a danger at all, once per spacing travelled), or the
+//!    proportional follower toward a point ahead on the path (or the farthest path cell
+//!    in line of sight).
 //!
 //! The navigator commands a forward and a turn speed and never learns which robot obeys
 //! them ([`Base`]); [`run`] closes the loop in simulation with a depth camera, drifting
@@ -33,7 +35,10 @@ pub use navigator::{Command, NavError, NavParams, Navigator, STILL_M, STILL_RAD}
 pub use perceived::{CellChange, Inserted, PerceivedMap};
 pub use picture::write_picture;
 pub use presets::{WHEELED_MOUNT, wheeled_params};
-pub use run::{RunOptions, RunReport, run, true_danger_map, true_map_path_m};
+pub use run::{
+    RunOptions, RunReport, last_replanned_path, run, true_danger_map, true_map_path_m,
+    untraversable_along,
+};
 pub use tca_nav_danger_map::DangerParams;
 pub use tca_nav_sensing::{Attitude, CameraMount, Pose2};
 pub use tca_nav_terrain_map::MatchParams;

@@ -45,7 +45,8 @@ pub struct RunReport {
     pub path: Vec<[f64; 2]>,
     /// The estimated positions, one per frame.
     pub estimated_path: Vec<[f64; 2]>,
-    /// The last planned path.
+    /// The path as planned at the last replan (the first plan if there was none), from
+    /// where the robot then stood to the goal, estimated frame.
     pub planned_path: Vec<[f64; 2]>,
     /// Replans because changed cells touched the path.
     pub replans: u64,
@@ -61,9 +62,10 @@ pub struct RunReport {
     pub collisions: u64,
     /// Frames in which the base tipped over.
     pub falls: u64,
-    /// Frames in which the robot's true cell is untraversable on the true terrain.
+    /// Frames in which the robot truly stood in, or on its way to the next frame passed
+    /// through, a cell that is untraversable on the true terrain.
     pub untraversable_frames: u64,
-    /// Where the robot truly stood in each of those frames, `[x, y]` m, world frame.
+    /// For each of those frames the first such point, `[x, y]` m, world frame.
     pub untraversable_at: Vec<[f64; 2]>,
     /// Length of the D* Lite path on the true danger map, m (`None` if there is none).
     pub true_map_path_m: Option<f64>,
@@ -96,6 +98,50 @@ pub fn true_danger_map(terrain: &HeightField, params: &NavParams) -> Result<Dang
         g.ny(),
         terrain,
     )?)
+}
+
+/// Where a true path meets untraversable cells of the true danger map: for each pose, the
+/// first point in such a cell on the straight way from it to the next pose (sampled every
+/// half cell, both ends included; the last pose alone), if there is one. A base moves
+/// several cells a frame, so looking at the poses alone would miss a corner clipped between
+/// two frames.
+pub fn untraversable_along(truth: &DangerMap, path: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let cells = truth.cells();
+    let step = 0.5 * cells.resolution_m();
+    let bad = |p: Point2<f64>| {
+        cells
+            .cell_at(p)
+            .is_some_and(|c| !truth.cell(c).is_traversable())
+    };
+    let mut out = Vec::new();
+    for (i, a) in path.iter().enumerate() {
+        let a = Point2::new(a[0], a[1]);
+        let b = path.get(i + 1).map_or(a, |b| Point2::new(b[0], b[1]));
+        let n = ((b - a).norm() / step).ceil().max(1.0) as usize;
+        if let Some(p) = (0..=n)
+            .map(|k| a + (b - a) * (k as f64 / n as f64))
+            .find(|p| bad(*p))
+        {
+            out.push([p.x, p.y]);
+        }
+    }
+    out
+}
+
+/// The path as planned at the last replan: the frames' paths and replan counts in order;
+/// the first frame's path if the count never rose.
+pub fn last_replanned_path<'a>(
+    frames: impl IntoIterator<Item = (u64, &'a [[f64; 2]])>,
+) -> Vec<[f64; 2]> {
+    let mut chosen: Option<&[[f64; 2]]> = None;
+    let mut count = None;
+    for (replans, path) in frames {
+        if count != Some(replans) {
+            chosen = Some(path);
+            count = Some(replans);
+        }
+    }
+    chosen.map(<[_]>::to_vec).unwrap_or_default()
 }
 
 /// Length of the D* Lite path from `start` to `goal` on a danger map, m.
@@ -188,17 +234,13 @@ pub fn run(
         true_map_path_m: true_path,
     };
     let mut computing = 0.0;
+    let mut planned: Vec<[f64; 2]> = Vec::new();
+    let mut plan_replans = None;
     let mut pose = base.true_pose();
     for _ in 0..opts.max_frames {
         report.frames += 1;
         report.path.push([pose.x, pose.y]);
         let est = odometry.estimate();
-        if let Some(c) = truth.cells().cell_at(Point2::new(pose.x, pose.y))
-            && !truth.cell(c).is_traversable()
-        {
-            report.untraversable_frames += 1;
-            report.untraversable_at.push([pose.x, pose.y]);
-        }
         let t0 = Instant::now();
         let attitude = base.attitude();
         let image = camera.capture(terrain, &mount.camera_pose(&pose, &attitude));
@@ -207,6 +249,10 @@ pub fn run(
         report.estimated_path.push([est.x, est.y]);
         let step = nav.step(est, &inserted.changes);
         computing += t0.elapsed().as_secs_f64();
+        if plan_replans != Some(nav.replans()) {
+            plan_replans = Some(nav.replans());
+            planned = nav.path().iter().map(|p| [p.x, p.y]).collect();
+        }
         match step {
             Ok(Command::Reached) => {
                 report.reached = true;
@@ -239,7 +285,9 @@ pub fn run(
     report.registrations = map.registrations();
     report.final_error_m = (Point2::new(pose.x, pose.y) - goal).norm();
     report.estimate_error_m = pose.distance(&est);
-    report.planned_path = nav.path().iter().map(|p| [p.x, p.y]).collect();
+    report.planned_path = planned;
+    report.untraversable_at = untraversable_along(&truth, &report.path);
+    report.untraversable_frames = report.untraversable_at.len() as u64;
     report.replans = nav.replans();
     report.exploration_turns = nav.exploration_turns();
     report.loop_hz = if computing > 0.0 {
@@ -248,4 +296,50 @@ pub fn run(
         0.0
     };
     Ok((report, nav))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tca_nav_danger_map::DangerParams;
+
+    /// A flat field with a tall narrow wall across x = 1.0 m.
+    fn walled() -> DangerMap {
+        let (nx, ny) = (100, 60);
+        let h = (0..nx * ny)
+            .map(|i| if i % nx == 50 { 0.3 } else { 0.0 })
+            .collect();
+        let terrain = HeightField::new(Point2::new(0.0, 0.0), 0.02, nx, ny, h).unwrap();
+        true_danger_map(
+            &terrain,
+            &NavParams::new(DangerParams::paper(0.3), crate::WHEELED_MOUNT, 0.2),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn a_wall_crossed_between_two_frames_is_counted() {
+        let truth = walled();
+        // Both poses on flat ground well clear of the wall, the way between them across it.
+        let (a, b) = ([0.4, 0.6], [1.6, 0.6]);
+        for p in [a, b] {
+            let c = truth.cells().cell_at(Point2::new(p[0], p[1])).unwrap();
+            assert!(truth.cell(c).is_traversable(), "{p:?} is not clear");
+        }
+        let hits = untraversable_along(&truth, &[a, b]);
+        assert_eq!(hits.len(), 1, "{hits:?}");
+        assert!(hits[0][0] > 0.4 && hits[0][0] < 1.0, "{hits:?}");
+        // Alongside the wall, never across it: nothing.
+        assert!(untraversable_along(&truth, &[[0.3, 0.2], [0.3, 1.0], [0.3, 0.6]]).is_empty());
+    }
+
+    #[test]
+    fn the_planned_path_is_the_one_of_the_last_replan() {
+        let (p0, p1, p2, p3) = ([[0.0, 0.0]], [[1.0, 0.0]], [[2.0, 0.0]], [[3.0, 0.0]]);
+        let frames: Vec<(u64, &[[f64; 2]])> = vec![(0, &p0), (0, &p1), (1, &p2), (1, &p3)];
+        assert_eq!(last_replanned_path(frames), vec![[2.0, 0.0]]);
+        let never: Vec<(u64, &[[f64; 2]])> = vec![(0, &p0), (0, &p1)];
+        assert_eq!(last_replanned_path(never), vec![[0.0, 0.0]]);
+        assert!(last_replanned_path(Vec::new()).is_empty());
+    }
 }
