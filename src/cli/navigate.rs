@@ -71,6 +71,16 @@ pub(crate) struct NavigateArgs {
     /// the square of the distance.
     #[arg(long, value_name = "M", conflicts_with = "connect")]
     map_range: Option<f64>,
+    /// The depth camera's horizontal field of view, degrees (default 60).
+    #[arg(long, value_name = "DEG", conflicts_with = "connect")]
+    camera_fov: Option<f64>,
+    /// The depth camera's image size in pixels, WIDTHxHEIGHT (default 160x120).
+    #[arg(long, value_name = "WxH", conflicts_with = "connect")]
+    camera_pixels: Option<String>,
+    /// The depth camera's range noise factor k, 1/m: the depth's standard deviation is
+    /// k z² (default 0.004).
+    #[arg(long, value_name = "K", conflicts_with = "connect")]
+    camera_noise: Option<f64>,
     /// Danger parameters file (TOML) instead of the robot's own.
     #[arg(long, conflicts_with = "connect")]
     danger: Option<PathBuf>,
@@ -248,6 +258,27 @@ pub(crate) async fn run_navigate(args: NavigateArgs) -> anyhow::Result<ExitCode>
             );
         }
         params.map_range_m = range;
+    }
+    if let Some(fov) = args.camera_fov {
+        params.camera.hfov_rad = fov.to_radians();
+    }
+    if let Some(pixels) = &args.camera_pixels {
+        let parsed = pixels
+            .split_once(['x', 'X'])
+            .and_then(|(w, h)| Some((w.trim().parse().ok()?, h.trim().parse().ok()?)));
+        let Some((width, height)) = parsed else {
+            bail!("--camera-pixels {pixels} is not valid; give WIDTHxHEIGHT, e.g. 320x240");
+        };
+        params.camera.width = width;
+        params.camera.height = height;
+    }
+    if let Some(k) = args.camera_noise {
+        params.camera.noise_per_m = k;
+    }
+    if let Err(e) = params.camera.validate() {
+        bail!(
+            "the depth camera set by --camera-fov, --camera-pixels and --camera-noise is not valid: {e}"
+        );
     }
     if let Some(clearance) = args.clearance {
         if !(clearance.is_finite() && clearance >= 0.0) {

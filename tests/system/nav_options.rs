@@ -1,6 +1,6 @@
-//! `tca navigate`'s planning and following options: `--beta`, `--lookahead`, `--sight`,
-//! `--clearance` and `--map-range` change the run (and the true-map path it is judged against), and values that
-//! cannot work are refused saying what to give.
+//! `tca navigate`'s planning, following and sensing options: `--beta`, `--lookahead`,
+//! `--sight`, `--clearance`, `--map-range` and the camera's change the run (and the true-map
+//! path it is judged against), and values that cannot work are refused saying what to give.
 
 use crate::common::*;
 
@@ -36,6 +36,7 @@ fn planning_and_following_options_change_the_run_and_bad_values_are_refused() {
     let no_sight = run(&["--sight", "0"]);
     let wide = run(&["--clearance", "0.15"]);
     let near = run(&["--map-range", "1.0"]);
+    let wide_eye = run(&["--camera-fov", "90", "--camera-pixels", "200x120"]);
     // A goal west and north of the start, given as `--goal -DX,DY` without `=`.
     let west = run(&["--goal", "-0.3,0.2"]);
     assert_eq!(west["reached"], true, "{west}");
@@ -46,7 +47,7 @@ fn planning_and_following_options_change_the_run_and_bad_values_are_refused() {
         (x - 0.25).hypot(y - 1.3) < 0.1,
         "ended at ({x}, {y}), not 0.3 m west and 0.2 m north of the start: {west}"
     );
-    for r in [&default, &heavy, &long, &no_sight, &wide, &near] {
+    for r in [&default, &heavy, &long, &no_sight, &wide, &near, &wide_eye] {
         assert_eq!(r["untraversable_frames"], 0, "{r}");
         assert_eq!(r["untraversable_at"], serde_json::json!([]), "{r}");
         assert_eq!(r["reached"], true, "{r}");
@@ -68,6 +69,10 @@ fn planning_and_following_options_change_the_run_and_bad_values_are_refused() {
         "--clearance 0.15 drove the same path"
     );
     assert_ne!(
+        default["path"], wide_eye["path"],
+        "a wider camera drove the same path"
+    );
+    assert_ne!(
         default["path"], near["path"],
         "--map-range 1.0 drove the same path"
     );
@@ -82,6 +87,13 @@ fn planning_and_following_options_change_the_run_and_bad_values_are_refused() {
         (vec!["--sight=-0.5"], "--sight -0.5 is not valid"),
         (vec!["--clearance=-0.1"], "--clearance -0.1 is not valid"),
         (vec!["--map-range", "0"], "--map-range 0 is not valid"),
+        (
+            vec!["--camera-pixels", "wide"],
+            "--camera-pixels wide is not valid",
+        ),
+        (vec!["--camera-pixels", "0x120"], "at least 1 x 1 pixels"),
+        (vec!["--camera-fov", "200"], "an angle between 0 and pi"),
+        (vec!["--camera-noise=-1"], "noise_per_m"),
     ] {
         let mut all = vec!["navigate", "--terrain", "hill", "--direct"];
         all.extend_from_slice(&args);
