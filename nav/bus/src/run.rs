@@ -16,8 +16,7 @@ use tca_nav_messages::{
     AcquireDepth, DangerMapQuery, FrameOutcome, InsertDepth, NavFrame, Navigate, SimStatus,
 };
 use tca_nav_navigator::{
-    RunOptions, RunReport, last_replanned_path, true_danger_map, true_map_path_m,
-    untraversable_along,
+    LastReplan, RunOptions, RunReport, true_danger_map, true_map_path_m, untraversable_along,
 };
 use tca_robot::Grid;
 
@@ -164,7 +163,13 @@ pub async fn run_with(
             .iter()
             .map(|f| [f.estimate.x_m, f.estimate.y_m])
             .collect(),
-        planned_path: last_replanned_path(frames.iter().map(|f| (f.replans, f.path.as_slice()))),
+        planned_path: {
+            let mut last = LastReplan::default();
+            for f in &frames {
+                last.frame(f.replans, || f.path.clone());
+            }
+            last.into_path()
+        },
         replans: frames.last().map_or(0, |f| f.replans),
         exploration_turns: frames.last().map_or(0, |f| f.exploration_turns),
         registrations: frames.last().map_or(0, |f| f.registrations),

@@ -36,8 +36,7 @@ pub use perceived::{CellChange, Inserted, PerceivedMap};
 pub use picture::write_picture;
 pub use presets::{WHEELED_MOUNT, wheeled_params};
 pub use run::{
-    RunOptions, RunReport, last_replanned_path, run, true_danger_map, true_map_path_m,
-    untraversable_along,
+    LastReplan, RunOptions, RunReport, run, true_danger_map, true_map_path_m, untraversable_along,
 };
 pub use tca_nav_danger_map::DangerParams;
 pub use tca_nav_sensing::{Attitude, CameraMount, Pose2};

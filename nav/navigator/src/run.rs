@@ -128,20 +128,28 @@ pub fn untraversable_along(truth: &DangerMap, path: &[[f64; 2]]) -> Vec<[f64; 2]
     out
 }
 
-/// The path as planned at the last replan: the frames' paths and replan counts in order;
-/// the first frame's path if the count never rose.
-pub fn last_replanned_path<'a>(
-    frames: impl IntoIterator<Item = (u64, &'a [[f64; 2]])>,
-) -> Vec<[f64; 2]> {
-    let mut chosen: Option<&[[f64; 2]]> = None;
-    let mut count = None;
-    for (replans, path) in frames {
-        if count != Some(replans) {
-            chosen = Some(path);
-            count = Some(replans);
+/// Keeps the path as planned at the last replan: shown each frame's replan count in
+/// order, it takes the frame's path whenever the count moves (the first frame's if it
+/// never does).
+#[derive(Debug, Clone, Default)]
+pub struct LastReplan {
+    replans: Option<u64>,
+    path: Vec<[f64; 2]>,
+}
+
+impl LastReplan {
+    /// One frame: its replan count and (asked for only when the count moved) its path.
+    pub fn frame(&mut self, replans: u64, path: impl FnOnce() -> Vec<[f64; 2]>) {
+        if self.replans != Some(replans) {
+            self.replans = Some(replans);
+            self.path = path();
         }
     }
-    chosen.map(<[_]>::to_vec).unwrap_or_default()
+
+    /// The path kept.
+    pub fn into_path(self) -> Vec<[f64; 2]> {
+        self.path
+    }
 }
 
 /// Length of the D* Lite path from `start` to `goal` on a danger map, m.
@@ -234,8 +242,7 @@ pub fn run(
         true_map_path_m: true_path,
     };
     let mut computing = 0.0;
-    let mut planned: Vec<[f64; 2]> = Vec::new();
-    let mut plan_replans = None;
+    let mut planned = LastReplan::default();
     let mut pose = base.true_pose();
     for _ in 0..opts.max_frames {
         report.frames += 1;
@@ -249,10 +256,9 @@ pub fn run(
         report.estimated_path.push([est.x, est.y]);
         let step = nav.step(est, &inserted.changes);
         computing += t0.elapsed().as_secs_f64();
-        if plan_replans != Some(nav.replans()) {
-            plan_replans = Some(nav.replans());
-            planned = nav.path().iter().map(|p| [p.x, p.y]).collect();
-        }
+        planned.frame(nav.replans(), || {
+            nav.path().iter().map(|p| [p.x, p.y]).collect()
+        });
         match step {
             Ok(Command::Reached) => {
                 report.reached = true;
@@ -285,7 +291,7 @@ pub fn run(
     report.registrations = map.registrations();
     report.final_error_m = (Point2::new(pose.x, pose.y) - goal).norm();
     report.estimate_error_m = pose.distance(&est);
-    report.planned_path = planned;
+    report.planned_path = planned.into_path();
     report.untraversable_at = untraversable_along(&truth, &report.path);
     report.untraversable_frames = report.untraversable_at.len() as u64;
     report.replans = nav.replans();
@@ -335,11 +341,18 @@ mod tests {
 
     #[test]
     fn the_planned_path_is_the_one_of_the_last_replan() {
-        let (p0, p1, p2, p3) = ([[0.0, 0.0]], [[1.0, 0.0]], [[2.0, 0.0]], [[3.0, 0.0]]);
-        let frames: Vec<(u64, &[[f64; 2]])> = vec![(0, &p0), (0, &p1), (1, &p2), (1, &p3)];
-        assert_eq!(last_replanned_path(frames), vec![[2.0, 0.0]]);
-        let never: Vec<(u64, &[[f64; 2]])> = vec![(0, &p0), (0, &p1)];
-        assert_eq!(last_replanned_path(never), vec![[0.0, 0.0]]);
-        assert!(last_replanned_path(Vec::new()).is_empty());
+        let kept = |frames: &[(u64, f64)]| {
+            let mut last = LastReplan::default();
+            for &(replans, x) in frames {
+                last.frame(replans, || vec![[x, 0.0]]);
+            }
+            last.into_path()
+        };
+        assert_eq!(
+            kept(&[(0, 0.0), (0, 1.0), (1, 2.0), (1, 3.0)]),
+            vec![[2.0, 0.0]]
+        );
+        assert_eq!(kept(&[(0, 0.0), (0, 1.0)]), vec![[0.0, 0.0]]);
+        assert!(kept(&[]).is_empty());
     }
 }
