@@ -14,6 +14,7 @@ mod module;
 mod navigate;
 mod ping;
 mod plan;
+mod realtime;
 mod registry;
 mod replay;
 mod robot;
@@ -32,6 +33,13 @@ use tca_central::DEFAULT_ENDPOINT;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Run every thread of this process (and the processes it starts) under the kernel's
+    /// real-time FIFO scheduler at this priority, 1-99, so that it keeps its timing on a
+    /// loaded machine (central, a bridge, a controller). Needs CAP_SYS_NICE or an rtprio
+    /// limit; a computation under it holds its core until it is done.
+    #[arg(long, global = true, value_name = "PRIORITY",
+          value_parser = clap::value_parser!(u8).range(1..=99))]
+    realtime: Option<u8>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -177,6 +185,12 @@ fn init_tracing() {
 pub(crate) fn main() -> ExitCode {
     let cli = Cli::parse();
     init_tracing();
+    if let Some(priority) = cli.realtime
+        && let Err(e) = realtime::enter(priority)
+    {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
     let runtime = match tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()

@@ -27,6 +27,7 @@ mod map;
 mod nav_options;
 mod nav_processes;
 mod plan_cgspace;
+mod realtime;
 mod replay;
 mod tree;
 mod walk;

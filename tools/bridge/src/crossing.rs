@@ -212,6 +212,7 @@ impl DelayLine {
             .name(name.to_owned())
             .spawn(move || {
                 let _runtime = runtime.enter();
+                above_the_process();
                 while let Ok((due, crossing)) = rx.recv() {
                     let now = Instant::now();
                     if due > now {
@@ -229,6 +230,37 @@ impl DelayLine {
     pub(crate) fn take(&self, crossing: Crossing) -> bool {
         let due = crossing.received + self.delay;
         self.tx.send((due, crossing)).is_ok()
+    }
+}
+
+/// Under a real-time FIFO scheduler (`tca --realtime`), puts the calling delay-line thread
+/// one priority above the rest of the process: a runtime worker or the log writer busy at the
+/// process's priority would otherwise hold a core the line needs at its release time. Under
+/// the ordinary scheduler nothing changes.
+fn above_the_process() {
+    use thread_priority::{
+        RealtimeThreadSchedulePolicy, ThreadPriority, ThreadPriorityValue, ThreadSchedulePolicy,
+    };
+    let id = thread_priority::thread_native_id();
+    let Ok((ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo), params)) =
+        thread_priority::thread_schedule_policy_param(id)
+    else {
+        return;
+    };
+    let Ok(above) = u8::try_from(params.sched_priority + 1) else {
+        return;
+    };
+    let Ok(value) = ThreadPriorityValue::try_from(above) else {
+        return;
+    };
+    let policy = ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo);
+    match thread_priority::set_thread_priority_and_policy(
+        id,
+        ThreadPriority::Crossplatform(value),
+        policy,
+    ) {
+        Ok(()) => tracing::debug!(priority = above, "delay line above the process"),
+        Err(e) => tracing::debug!(error = ?e, "delay line left at the process's priority"),
     }
 }
 
@@ -298,5 +330,64 @@ mod tests {
         assert_eq!(name.as_str(), names::KILL_TASK);
         let k: KillTask = tca_messages::decode_data(&data).unwrap();
         assert_eq!(k.task, crossing_id(9));
+    }
+
+    /// The scheduling policy and priority of the thread a line releases on, when the thread
+    /// that starts the line runs under `policy` (`None`: the policy could not be set here).
+    fn line_policy_under(
+        policy: Option<thread_priority::ThreadSchedulePolicy>,
+        priority: u8,
+    ) -> Option<(thread_priority::ThreadSchedulePolicy, i32)> {
+        std::thread::spawn(move || {
+            use thread_priority::{ThreadPriority, ThreadPriorityValue};
+            if let Some(policy) = policy {
+                thread_priority::set_thread_priority_and_policy(
+                    thread_priority::thread_native_id(),
+                    ThreadPriority::Crossplatform(ThreadPriorityValue::try_from(priority).ok()?),
+                    policy,
+                )
+                .ok()?;
+            }
+            let runtime = tokio::runtime::Builder::new_current_thread()
+                .build()
+                .unwrap();
+            let line = DelayLine::new(Duration::ZERO);
+            let (tx, rx) = mpsc::channel();
+            line.run("policy-probe", runtime.handle().clone(), move |_| {
+                let (p, params) = thread_priority::thread_schedule_policy_param(
+                    thread_priority::thread_native_id(),
+                )
+                .unwrap();
+                let _ = tx.send((p, params.sched_priority));
+                false
+            })
+            .unwrap();
+            line.take(inform(1, Instant::now()));
+            rx.recv_timeout(Duration::from_secs(5)).ok()
+        })
+        .join()
+        .unwrap()
+    }
+
+    #[test]
+    fn a_line_runs_one_priority_above_a_real_time_process_and_ordinary_otherwise() {
+        use thread_priority::{
+            NormalThreadSchedulePolicy, RealtimeThreadSchedulePolicy, ThreadSchedulePolicy,
+        };
+        let fifo = ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo);
+        let (policy, _) = line_policy_under(None, 0).expect("the line released");
+        assert_eq!(
+            policy,
+            ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Other),
+            "an ordinary process's line stays ordinary"
+        );
+        match line_policy_under(Some(fifo), 5) {
+            Some(got) => assert_eq!(got, (fifo, 6), "one above the process's 5"),
+            None => eprintln!("this user may not use the real-time scheduler; half checked"),
+        }
+        match line_policy_under(Some(fifo), 99) {
+            Some(got) => assert_eq!(got, (fifo, 99), "99 is the top: left there"),
+            None => eprintln!("this user may not use the real-time scheduler; half checked"),
+        }
     }
 }
