@@ -8,6 +8,8 @@
 //! default 5), their ratio (5 workers' time / 1 worker's), and how many of the machine's
 //! cores the process kept busy while planning (its CPU time over the wall time).
 //!
+//! `CG_BENCH_DRAWS=N` sets the roadmap's draws per batch (default 48).
+//!
 //! `CG_BENCH_WRITE_TERRAIN=FILE.asc` also writes the terrain, for the same plan on worker
 //! processes: `tca plan cgspace --robot ambler --terrain FILE.asc --from 4,48 --to 92,48
 //! --workers 5 --region-cap 120 --route-only --json` (and `--workers 1`).
@@ -138,7 +140,7 @@ impl Setup {
             self.start,
             self.goal,
             &RouteParams::default(),
-            &BatchParams::default(),
+            &batch_params(),
         )
         .expect("a route");
         let took = began.elapsed();
@@ -207,6 +209,18 @@ fn setup() -> Setup {
         connector,
         _central: central,
     }
+}
+
+/// The roadmap's batches: the default, or `CG_BENCH_DRAWS` draws a batch.
+fn batch_params() -> BatchParams {
+    let mut params = BatchParams::default();
+    if let Some(draws) = std::env::var("CG_BENCH_DRAWS")
+        .ok()
+        .and_then(|d| d.parse().ok())
+    {
+        params.draws_per_batch = draws;
+    }
+    params
 }
 
 fn median(mut v: Vec<Duration>) -> Duration {
