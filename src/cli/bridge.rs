@@ -82,6 +82,10 @@ pub(crate) struct DelaysArgs {
     /// The ground-side central's traffic log.
     #[arg(long, value_name = "FILE.mcap", requires = "robot_log")]
     ground_log: Option<PathBuf>,
+    /// Also list the N crossings furthest past their way's setting, worst first (message,
+    /// way, when in the session), to find what made a tail.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    worst: usize,
     /// Print the figures as one line of JSON.
     #[arg(long)]
     json: bool,
@@ -253,18 +257,42 @@ fn print_delays(title: &str, stats: &[DelayStats]) {
     }
 }
 
+fn print_worst(worst: &[tca_bridge::LateCrossing]) {
+    if worst.is_empty() {
+        return;
+    }
+    println!("  furthest past the setting:");
+    for l in worst {
+        println!(
+            "    {:+.1} ms  #{} {} {} {} at {:.3} s",
+            l.error_ms, l.id, l.direction, l.class, l.name, l.at_s
+        );
+    }
+}
+
 fn delays(args: DelaysArgs) -> anyhow::Result<ExitCode> {
     let recorded = Recorded::open(&args.log)?;
     let bridge = recorded.delay_stats();
     print_delays("measured by the bridge", &bridge);
     let mut json = serde_json::json!({ "bridge": bridge });
+    if args.worst > 0 {
+        let worst = recorded.worst(args.worst);
+        print_worst(&worst);
+        json["bridge_worst"] = serde_json::to_value(&worst)?;
+    }
     if let (Some(r), Some(g)) = (&args.robot_log, &args.ground_log) {
         let read = |p: &PathBuf| {
             tca_logs::LogFile::open(p).with_context(|| format!("cannot read {}", p.display()))
         };
-        let between = tca_bridge::end_to_end(&recorded, &read(r)?, &read(g)?);
+        let (robot, ground) = (read(r)?, read(g)?);
+        let between = tca_bridge::end_to_end(&recorded, &robot, &ground);
         print_delays("between the centrals (from their logs)", &between);
         json["centrals"] = serde_json::to_value(&between)?;
+        if args.worst > 0 {
+            let worst = tca_bridge::worst_between(&recorded, &robot, &ground, args.worst);
+            print_worst(&worst);
+            json["centrals_worst"] = serde_json::to_value(&worst)?;
+        }
     }
     if args.json {
         println!("{json}");

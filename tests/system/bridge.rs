@@ -142,6 +142,8 @@ async fn ten_leg_moves_across_the_bridge_at_the_moons_distance() {
             &d("robot.mcap"),
             "--ground-log",
             &d("ground.mcap"),
+            "--worst",
+            "3",
             "--json",
         ],
         STEP,
@@ -153,6 +155,33 @@ async fn ten_leg_moves_across_the_bridge_at_the_moons_distance() {
         serde_json::from_str(stdout.lines().last().expect("a JSON line")).expect("JSON");
     check_delays("the bridge", &figures["bridge"]);
     check_delays("between the centrals", &figures["centrals"]);
+    // The worst crossings each way: three, worst first, the first the largest maximum.
+    for (worst, ways) in [("bridge_worst", "bridge"), ("centrals_worst", "centrals")] {
+        let list = figures[worst].as_array().expect(worst);
+        assert_eq!(list.len(), 3, "{worst}: {list:?}");
+        let errors: Vec<f64> = list
+            .iter()
+            .map(|l| l["error_ms"].as_f64().unwrap())
+            .collect();
+        assert!(
+            errors.windows(2).all(|w| w[0] >= w[1]),
+            "{worst}: {errors:?}"
+        );
+        let max = figures[ways]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|w| w["max_error_ms"].as_f64().unwrap())
+            .fold(f64::MIN, f64::max);
+        assert!(
+            (errors[0] - max).abs() < 1e-6,
+            "{worst}: {errors:?} against {max}"
+        );
+        assert!(
+            list.iter()
+                .all(|l| l["name"].as_str().is_some_and(|n| !n.is_empty()))
+        );
+    }
     for way in figures["bridge"].as_array().unwrap() {
         assert_eq!(way["setting_s"], 1.3, "{way}");
     }

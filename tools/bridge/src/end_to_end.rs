@@ -15,6 +15,7 @@ use tca_messages::{Class, MessageId};
 use crate::recorded::{Recorded, RecordedCrossing};
 use crate::side::Side;
 use crate::stats::DelayStats;
+use crate::worst::{LateCrossing, worst};
 
 /// When each message reached one central: by its id, and (for answers) by the id it answers.
 struct Arrivals {
@@ -84,4 +85,21 @@ pub fn end_to_end(recorded: &Recorded, robot: &LogFile, ground: &LogFile) -> Vec
             .filter_map(|c| delay(c, &logs))
             .collect()
     })
+}
+
+/// The `n` crossings that took longest past the setting between the two centrals (from
+/// their logs, `robot` and `ground`), worst first.
+pub fn worst_between(
+    recorded: &Recorded,
+    robot: &LogFile,
+    ground: &LogFile,
+    n: usize,
+) -> Vec<LateCrossing> {
+    let logs = [Arrivals::of(robot), Arrivals::of(ground)];
+    worst(
+        recorded.crossings.values(),
+        recorded.delays_s.unwrap_or((0.0, 0.0)),
+        n,
+        |c| delay(c, &logs),
+    )
 }

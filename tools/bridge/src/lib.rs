@@ -58,10 +58,11 @@ pub mod recorded;
 pub mod select;
 pub mod side;
 pub mod stats;
+pub mod worst;
 
 pub use bridge::{CAPACITY, Carry, RunningBridge, Summary, start};
 pub use crossing::crossing_id;
-pub use end_to_end::end_to_end;
+pub use end_to_end::{end_to_end, worst_between};
 pub use error::{BridgeError, Result};
 pub use file::{BridgeConfig, BridgeFile, DEFAULT_NAME, NamePattern, WayConfig};
 pub use log::Settings;
@@ -70,6 +71,7 @@ pub use recorded::{Recorded, RecordedCrossing};
 pub use select::Forwarded;
 pub use side::{Direction, Side};
 pub use stats::DelayStats;
+pub use worst::LateCrossing;
 
 #[cfg(test)]
 mod bridge_tests;

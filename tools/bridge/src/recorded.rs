@@ -12,6 +12,7 @@ use crate::error::{BridgeError, Result};
 use crate::log::Settings;
 use crate::side::{Direction, Side};
 use crate::stats::DelayStats;
+use crate::worst::{LateCrossing, worst};
 
 /// One crossing as the log recorded it.
 #[derive(Clone, Debug, PartialEq)]
@@ -166,6 +167,16 @@ impl Recorded {
                 .filter_map(RecordedCrossing::delay_s)
                 .collect()
         })
+    }
+
+    /// The `n` crossings the bridge held longest past their way's setting, worst first.
+    pub fn worst(&self, n: usize) -> Vec<LateCrossing> {
+        worst(
+            self.crossings.values(),
+            self.delays_s.unwrap_or((0.0, 0.0)),
+            n,
+            RecordedCrossing::delay_s,
+        )
     }
 
     /// Crossings of one message name, one way, in order.
